@@ -1,0 +1,104 @@
+//! Hot paths of the tree crate: keys + sort, tree build and neighbour
+//! search, on uniform random particles with about 100 neighbours each.
+
+use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
+use sph_tree::{
+    apply_permutation, compute_keys, Boundary, BoundingBox, Curve, KeySorter, NeighborList,
+    NeighborSearch, Octree,
+};
+use std::hint::black_box;
+
+struct Set {
+    x: Vec<f64>,
+    y: Vec<f64>,
+    z: Vec<f64>,
+    h: Vec<f64>,
+    keys: Vec<u64>,
+    bbox: BoundingBox,
+}
+
+fn random_set(n: usize) -> Set {
+    let mut s: u64 = 0x1234_5678;
+    let mut next = move || {
+        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let x: Vec<f64> = (0..n).map(|_| next()).collect();
+    let y: Vec<f64> = (0..n).map(|_| next()).collect();
+    let z: Vec<f64> = (0..n).map(|_| next()).collect();
+    // (4/3) pi (2h)^3 n = 100 neighbours.
+    let h = vec![0.5 * (100.0 * 3.0 / (4.0 * std::f64::consts::PI * n as f64)).cbrt(); n];
+    let bbox = BoundingBox::cube(0.0, 1.0, Boundary::Periodic).unwrap();
+    Set { x, y, z, h, keys: Vec::new(), bbox }
+}
+
+fn sorted_set(n: usize) -> Set {
+    let mut s = random_set(n);
+    compute_keys(&s.bbox, Curve::Hilbert, &s.x, &s.y, &s.z, &mut s.keys);
+    let mut perm = Vec::new();
+    KeySorter::new().sort(&s.keys, None, &mut perm);
+    let mut f = Vec::new();
+    for a in [&mut s.x, &mut s.y, &mut s.z, &mut s.h] {
+        apply_permutation(&perm, a, &mut f);
+    }
+    let mut k = Vec::new();
+    apply_permutation(&perm, &mut s.keys, &mut k);
+    s
+}
+
+fn benches(c: &mut Criterion) {
+    for &n in &[100_000usize, 1_000_000] {
+        let label = if n == 100_000 { "1e5" } else { "1e6" };
+        let raw = random_set(n);
+        let mut g = c.benchmark_group(format!("tree_{label}"));
+        g.sample_size(10);
+
+        let mut keys = Vec::new();
+        let mut perm = Vec::new();
+        let mut sorter = KeySorter::new();
+        g.bench_function("keys_and_sort", |b| {
+            b.iter(|| {
+                compute_keys(&raw.bbox, Curve::Hilbert, &raw.x, &raw.y, &raw.z, &mut keys);
+                sorter.sort(&keys, None, &mut perm);
+                black_box(perm[0])
+            })
+        });
+
+        let s = sorted_set(n);
+        let mut tree = Octree::build(&s.keys, &s.x, &s.y, &s.z, 16).unwrap();
+        g.bench_function("build_bucket16", |b| {
+            b.iter(|| {
+                tree.rebuild(&s.keys, &s.x, &s.y, &s.z, 16).unwrap();
+                black_box(tree.num_nodes())
+            })
+        });
+
+        let mut list = NeighborList::new();
+        let search = NeighborSearch::default();
+        g.bench_function("neighbors_100", |b| {
+            b.iter_batched_ref(
+                || (),
+                |_| {
+                    let st = search
+                        .find(&tree, &s.bbox, &s.x, &s.y, &s.z, &s.h, 0..n, &mut list)
+                        .unwrap();
+                    black_box(st.total)
+                },
+                BatchSize::PerIteration,
+            )
+        });
+        let st = search
+            .find(&tree, &s.bbox, &s.x, &s.y, &s.z, &s.h, 0..n, &mut list)
+            .unwrap();
+        eprintln!(
+            "{label}: mean neighbours {:.1}, neighbour-list bytes per particle {:.1}, tree nodes {}",
+            st.total as f64 / n as f64,
+            list.bytes() as f64 / n as f64,
+            tree.num_nodes()
+        );
+        g.finish();
+    }
+}
+
+criterion_group!(tree_benches, benches);
+criterion_main!(tree_benches);
