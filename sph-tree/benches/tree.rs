@@ -20,7 +20,9 @@ struct Set {
 fn random_set(n: usize) -> Set {
     let mut s: u64 = 0x1234_5678;
     let mut next = move || {
-        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (s >> 11) as f64 / (1u64 << 53) as f64
     };
     let x: Vec<f64> = (0..n).map(|_| next()).collect();
@@ -29,7 +31,14 @@ fn random_set(n: usize) -> Set {
     // (4/3) pi (2h)^3 n = 100 neighbours.
     let h = vec![0.5 * (100.0 * 3.0 / (4.0 * std::f64::consts::PI * n as f64)).cbrt(); n];
     let bbox = BoundingBox::cube(0.0, 1.0, Boundary::Periodic).unwrap();
-    Set { x, y, z, h, keys: Vec::new(), bbox }
+    Set {
+        x,
+        y,
+        z,
+        h,
+        keys: Vec::new(),
+        bbox,
+    }
 }
 
 fn sorted_set(n: usize) -> Set {

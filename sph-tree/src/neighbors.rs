@@ -10,6 +10,11 @@ use std::ops::Range;
 /// Particles per parallel work item: big enough to amortise scheduling,
 /// small enough to balance clustered sets over threads.
 const PARTICLES_PER_CHUNK: usize = 2048;
+/// Consecutive particles searched together (one tree walk per group).
+const GROUP_SIZE: usize = 32;
+/// Nodes holding at most this many particles are scanned whole instead of
+/// opened further.
+const CANDIDATE_SIZE: usize = 32;
 
 /// Search settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -126,37 +131,42 @@ impl NeighborSearch {
         if list.chunk_indices.len() < chunks.len() {
             list.chunk_indices.resize_with(chunks.len(), Vec::new);
         }
+        let ctx = Context {
+            tree,
+            bbox,
+            x,
+            y,
+            z,
+            h,
+            support: self.support,
+        };
         let cap = self.cap;
         // Pass 1, parallel over chunks: each chunk writes its own buffer and
-        // its slice of the counts/offsets.
+        // its slice of the counts and list sizes.
         {
             let mut counts_rest: &mut [u32] = &mut list.counts;
             let mut sizes_rest: &mut [usize] = &mut list.offsets[1..];
             let mut work = Vec::with_capacity(chunks.len());
-            let bufs = list.chunk_indices.iter_mut();
-            for (range, buf) in chunks.iter().zip(bufs) {
-                let (c, cr) = std::mem::take(&mut counts_rest).split_at_mut(range.len());
-                let (s, sr) = std::mem::take(&mut sizes_rest).split_at_mut(range.len());
+            for (chunk, buf) in chunks.iter().zip(list.chunk_indices.iter_mut()) {
+                let len = chunk.particles.len();
+                let (c, cr) = std::mem::take(&mut counts_rest).split_at_mut(len);
+                let (s, sr) = std::mem::take(&mut sizes_rest).split_at_mut(len);
                 counts_rest = cr;
                 sizes_rest = sr;
-                work.push((range.clone(), buf, c, s));
+                work.push((chunk, buf, c, s));
             }
-            work.into_par_iter().for_each(|(range, buf, counts, sizes)| {
-                buf.clear();
-                for (k, i) in range.enumerate() {
-                    let before = buf.len();
-                    let r = self.support * h[i];
-                    let mut n = 0usize;
-                    for_each_neighbor(tree, bbox, x, y, z, i, r, |j| {
-                        if n < cap {
-                            buf.push(j as u32);
-                        }
-                        n += 1;
-                    });
-                    counts[k] = n.min(u32::MAX as usize) as u32;
-                    sizes[k] = buf.len() - before;
-                }
-            });
+            work.into_par_iter()
+                .for_each(|(chunk, buf, counts, sizes)| {
+                    buf.clear();
+                    let mut sink = ListSink {
+                        buf,
+                        counts,
+                        sizes,
+                        cap,
+                        base: chunk.particles.start,
+                    };
+                    ctx.run_chunk(chunk, &mut sink);
+                });
         }
         // Prefix sum of the list sizes, then one parallel copy per chunk.
         for k in 0..nt {
@@ -194,19 +204,31 @@ impl NeighborSearch {
         self.validate(tree, bbox, x, y, z, h, &targets)?;
         counts.clear();
         counts.resize(targets.len(), 0);
-        let start = targets.start;
-        counts
-            .par_chunks_mut(PARTICLES_PER_CHUNK)
-            .enumerate()
-            .for_each(|(c, out)| {
-                for (k, o) in out.iter_mut().enumerate() {
-                    let i = start + c * PARTICLES_PER_CHUNK + k;
-                    let mut n = 0u32;
-                    for_each_neighbor(tree, bbox, x, y, z, i, self.support * h[i], |_| n += 1);
-                    *o = n;
-                }
-            });
-        Ok(stats(counts, self.cap, start))
+        let chunks = target_chunks(tree, &targets);
+        let ctx = Context {
+            tree,
+            bbox,
+            x,
+            y,
+            z,
+            h,
+            support: self.support,
+        };
+        let mut rest: &mut [u32] = counts;
+        let mut work = Vec::with_capacity(chunks.len());
+        for chunk in &chunks {
+            let (c, r) = std::mem::take(&mut rest).split_at_mut(chunk.particles.len());
+            rest = r;
+            work.push((chunk, c));
+        }
+        work.into_par_iter().for_each(|(chunk, counts)| {
+            let mut sink = CountSink {
+                counts,
+                base: chunk.particles.start,
+            };
+            ctx.run_chunk(chunk, &mut sink);
+        });
+        Ok(stats(counts, self.cap, targets.start))
     }
 
     fn validate(
@@ -251,6 +273,221 @@ impl NeighborSearch {
     }
 }
 
+/// Receives the neighbours of consecutive target particles.
+trait Sink {
+    /// Whether the sink needs the indices (else only their number).
+    const STORE: bool;
+    /// Particle `i` has `count` neighbours; when `STORE` they are
+    /// `neighbors`, complete and ascending (else `neighbors` is empty).
+    fn particle(&mut self, i: usize, neighbors: &[u32], count: usize);
+}
+
+struct ListSink<'a> {
+    buf: &'a mut Vec<u32>,
+    counts: &'a mut [u32],
+    sizes: &'a mut [usize],
+    cap: usize,
+    base: usize,
+}
+
+impl Sink for ListSink<'_> {
+    const STORE: bool = true;
+    #[inline]
+    fn particle(&mut self, i: usize, neighbors: &[u32], n: usize) {
+        let k = i - self.base;
+        self.buf.extend_from_slice(&neighbors[..n.min(self.cap)]);
+        self.counts[k] = n.min(u32::MAX as usize) as u32;
+        self.sizes[k] = n.min(self.cap);
+    }
+}
+
+struct CountSink<'a> {
+    counts: &'a mut [u32],
+    base: usize,
+}
+
+impl Sink for CountSink<'_> {
+    const STORE: bool = false;
+    #[inline]
+    fn particle(&mut self, i: usize, _neighbors: &[u32], n: usize) {
+        self.counts[i - self.base] = n.min(u32::MAX as usize) as u32;
+    }
+}
+
+/// A leaf that may hold neighbours of a group, with the periodic shift that
+/// brings it next to the group (`exact_shift = false`: the shift is not
+/// guaranteed right for every pair, so pairs use the minimum image).
+struct Candidate {
+    particles: Range<usize>,
+    lo: [f64; 3],
+    hi: [f64; 3],
+    shift: [f64; 3],
+    exact_shift: bool,
+}
+
+/// A run of consecutive leaves searched by one parallel task.
+struct Chunk {
+    particles: Range<usize>,
+}
+
+struct Context<'a> {
+    tree: &'a Octree,
+    bbox: &'a BoundingBox,
+    x: &'a [f64],
+    y: &'a [f64],
+    z: &'a [f64],
+    h: &'a [f64],
+    support: f64,
+}
+
+impl Context<'_> {
+    /// Searches the chunk in groups of `GROUP_SIZE` consecutive particles
+    /// (compact in space, thanks to the curve): one tree walk per group finds
+    /// the candidate nodes, then each particle of the group scans only those.
+    fn run_chunk(&self, chunk: &Chunk, sink: &mut impl Sink) {
+        let mut cands: Vec<Candidate> = Vec::with_capacity(256);
+        let mut scratch: Vec<u32> = Vec::new();
+        let mut a = chunk.particles.start;
+        while a < chunk.particles.end {
+            let b = (a + GROUP_SIZE).min(chunk.particles.end);
+            self.search_group(a..b, &mut cands, &mut scratch, sink);
+            a = b;
+        }
+    }
+
+    fn search_group<S: Sink>(
+        &self,
+        group: Range<usize>,
+        cands: &mut Vec<Candidate>,
+        scratch: &mut Vec<u32>,
+        sink: &mut S,
+    ) {
+        let (x, y, z) = (self.x, self.y, self.z);
+        let bbox = self.bbox;
+        let lengths = bbox.lengths();
+        let periodic = [
+            bbox.is_periodic(0),
+            bbox.is_periodic(1),
+            bbox.is_periodic(2),
+        ];
+        // Group box and largest search radius.
+        let mut glo = [f64::INFINITY; 3];
+        let mut ghi = [f64::NEG_INFINITY; 3];
+        let mut rmax: f64 = 0.0;
+        for i in group.clone() {
+            let p = [x[i], y[i], z[i]];
+            for d in 0..3 {
+                glo[d] = glo[d].min(p[d]);
+                ghi[d] = ghi[d].max(p[d]);
+            }
+            rmax = rmax.max(self.support * self.h[i]);
+        }
+        let gc = [
+            0.5 * (glo[0] + ghi[0]),
+            0.5 * (glo[1] + ghi[1]),
+            0.5 * (glo[2] + ghi[2]),
+        ];
+        let gh = [
+            0.5 * (ghi[0] - glo[0]),
+            0.5 * (ghi[1] - glo[1]),
+            0.5 * (ghi[2] - glo[2]),
+        ];
+        let rmax2 = rmax * rmax;
+        // Gap between the group box and a node box along each axis, nearest
+        // periodic image; also returns the shift putting the node there.
+        let gaps = |lo: [f64; 3], hi: [f64; 3]| -> (f64, [f64; 3], bool) {
+            let mut d2 = 0.0;
+            let mut shift = [0.0; 3];
+            let mut exact = true;
+            for d in 0..3 {
+                let nc = 0.5 * (lo[d] + hi[d]);
+                let nh = 0.5 * (hi[d] - lo[d]);
+                let mut dc = nc - gc[d];
+                if periodic[d] {
+                    let s = -lengths[d] * (dc / lengths[d]).round();
+                    dc += s;
+                    shift[d] = s;
+                    // A single image is right for all pairs within rmax
+                    // when rmax + extents <= L/2.
+                    exact &= rmax + 2.0 * (gh[d] + nh) <= 0.5 * lengths[d];
+                }
+                let gap = dc.abs() - gh[d] - nh;
+                if gap > 0.0 {
+                    d2 += gap * gap;
+                }
+            }
+            (d2, shift, exact)
+        };
+        cands.clear();
+        let tree = self.tree;
+        tree.traverse(
+            |node| {
+                let (lo, hi) = tree.node_box(node);
+                let (d2, shift, exact_shift) = gaps(lo, hi);
+                if d2 >= rmax2 {
+                    return false;
+                }
+                let particles = tree.particles(node);
+                if particles.len() > CANDIDATE_SIZE && !tree.is_leaf(node) {
+                    return true; // descend
+                }
+                cands.push(Candidate {
+                    particles,
+                    lo: [lo[0] + shift[0], lo[1] + shift[1], lo[2] + shift[2]],
+                    hi: [hi[0] + shift[0], hi[1] + shift[1], hi[2] + shift[2]],
+                    shift,
+                    exact_shift,
+                });
+                false
+            },
+            |_| {},
+        );
+        // Room for every candidate particle, so the scan below can write
+        // each index unconditionally and advance only on a hit (no branch).
+        let most: usize = cands.iter().map(|c| c.particles.len()).sum();
+        if S::STORE && scratch.len() < most {
+            scratch.resize(most, 0);
+        }
+        for i in group {
+            let p = [x[i], y[i], z[i]];
+            let r = self.support * self.h[i];
+            let r2 = r * r;
+            let mut len = 0usize;
+            for c in cands.iter() {
+                // Point-to-box distance against the (shifted) leaf box.
+                let mut d2 = 0.0;
+                for d in 0..3 {
+                    let g = (c.lo[d] - p[d]).max(p[d] - c.hi[d]);
+                    if g > 0.0 {
+                        d2 += g * g;
+                    }
+                }
+                if c.exact_shift {
+                    if d2 >= r2 {
+                        continue;
+                    }
+                    let q = [p[0] - c.shift[0], p[1] - c.shift[1], p[2] - c.shift[2]];
+                    for j in c.particles.clone() {
+                        let (dx, dy, dz) = (q[0] - x[j], q[1] - y[j], q[2] - z[j]);
+                        if S::STORE {
+                            scratch[len] = j as u32;
+                        }
+                        len += usize::from(dx * dx + dy * dy + dz * dz < r2);
+                    }
+                } else {
+                    for j in c.particles.clone() {
+                        if S::STORE {
+                            scratch[len] = j as u32;
+                        }
+                        len += usize::from(bbox.distance2(p, [x[j], y[j], z[j]]) < r2);
+                    }
+                }
+            }
+            sink.particle(i, &scratch[..if S::STORE { len } else { 0 }], len);
+        }
+    }
+}
+
 /// Calls `f(j)` for every particle `j` with `|x_i - x_j| < r`, in ascending
 /// `j` (self included when `r > 0`).
 #[inline]
@@ -292,14 +529,23 @@ pub fn for_each_neighbor(
     );
 }
 
-/// Splits the targets into contiguous chunks for the parallel loop.
-fn target_chunks(_tree: &Octree, targets: &Range<usize>) -> Vec<Range<usize>> {
+/// Splits the leaves holding targets into runs of about
+/// `PARTICLES_PER_CHUNK` particles, one parallel task each.
+fn target_chunks(tree: &Octree, targets: &Range<usize>) -> Vec<Chunk> {
+    let leaves = tree.leaves();
+    // First leaf ending after targets.start, first leaf starting at or after targets.end.
+    let a = leaves.partition_point(|&l| tree.particles(l).end <= targets.start);
+    let b = leaves.partition_point(|&l| tree.particles(l).start < targets.end);
     let mut out = Vec::with_capacity(targets.len() / PARTICLES_PER_CHUNK + 1);
-    let mut a = targets.start;
-    while a < targets.end {
-        let b = (a + PARTICLES_PER_CHUNK).min(targets.end);
-        out.push(a..b);
-        a = b;
+    let mut k = a;
+    while k < b {
+        let p0 = tree.particles(leaves[k]).start.max(targets.start);
+        let mut p1 = p0;
+        while k < b && p1 - p0 < PARTICLES_PER_CHUNK {
+            p1 = tree.particles(leaves[k]).end.min(targets.end);
+            k += 1;
+        }
+        out.push(Chunk { particles: p0..p1 });
     }
     out
 }

@@ -127,23 +127,20 @@ impl Octree {
         let first = &self.first[range.clone()];
         let count = &self.count[range.clone()];
         let nkey = &self.key[range.clone()];
-        self.splits
-            .par_iter_mut()
-            .enumerate()
-            .for_each(|(k, s)| {
-                let (a, n) = (first[k] as usize, count[k] as usize);
-                if n <= bucket || lvl >= MAX_LEVEL {
-                    s[0] = u32::MAX; // leaf marker
-                    return;
-                }
-                let slice = &keys[a..a + n];
-                s[0] = a as u32;
-                for d in 1..8u64 {
-                    let bound = nkey[k] | (d << shift);
-                    s[d as usize] = (a + slice.partition_point(|&kk| kk < bound)) as u32;
-                }
-                s[8] = (a + n) as u32;
-            });
+        self.splits.par_iter_mut().enumerate().for_each(|(k, s)| {
+            let (a, n) = (first[k] as usize, count[k] as usize);
+            if n <= bucket || lvl >= MAX_LEVEL {
+                s[0] = u32::MAX; // leaf marker
+                return;
+            }
+            let slice = &keys[a..a + n];
+            s[0] = a as u32;
+            for d in 1..8u64 {
+                let bound = nkey[k] | (d << shift);
+                s[d as usize] = (a + slice.partition_point(|&kk| kk < bound)) as u32;
+            }
+            s[8] = (a + n) as u32;
+        });
         for k in 0..range.len() {
             let s = self.splits[k];
             if s[0] == u32::MAX {

@@ -219,7 +219,11 @@ pub fn apply_permutation<T: Copy + Send + Sync + Default>(
     data: &mut Vec<T>,
     scratch: &mut Vec<T>,
 ) {
-    assert_eq!(perm.len(), data.len(), "permutation and data differ in length");
+    assert_eq!(
+        perm.len(),
+        data.len(),
+        "permutation and data differ in length"
+    );
     scratch.clear();
     scratch.resize(perm.len(), T::default());
     scratch

@@ -60,7 +60,11 @@ fn make_set(n: usize, seed: u64, layout: Layout, periodic: bool, h_spread: f64) 
                 let ct = 2.0 * rng.uniform() - 1.0;
                 let st = (1.0 - ct * ct).sqrt();
                 let ph = std::f64::consts::TAU * rng.uniform();
-                [0.5 + r * st * ph.cos(), 0.5 + r * st * ph.sin(), 0.5 + r * ct]
+                [
+                    0.5 + r * st * ph.cos(),
+                    0.5 + r * st * ph.sin(),
+                    0.5 + r * ct,
+                ]
             }
         };
         x.push(p[0]);
@@ -266,7 +270,10 @@ fn cap_is_reported_not_silent() {
         .unwrap();
     let cap = all.max_count - 5;
     let mut cut = NeighborList::new();
-    let search = NeighborSearch { cap, ..Default::default() };
+    let search = NeighborSearch {
+        cap,
+        ..Default::default()
+    };
     let st = search
         .find(&tree, &s.bbox, &s.x, &s.y, &s.z, &s.h, 0..n, &mut cut)
         .unwrap();
@@ -302,7 +309,16 @@ fn periodic_radius_too_large_is_an_error() {
     let tree = Octree::build(&s.keys, &s.x, &s.y, &s.z, 8).unwrap();
     let h = vec![0.3; 50];
     let err = NeighborSearch::default()
-        .find(&tree, &s.bbox, &s.x, &s.y, &s.z, &h, 0..50, &mut NeighborList::new())
+        .find(
+            &tree,
+            &s.bbox,
+            &s.x,
+            &s.y,
+            &s.z,
+            &h,
+            0..50,
+            &mut NeighborList::new(),
+        )
         .unwrap_err();
     assert!(err.to_string().contains("0.6"), "{err}");
 }
@@ -333,7 +349,12 @@ fn rebuild_reuses_and_matches_fresh_build() {
 
 #[test]
 fn wrap_maps_into_periodic_box() {
-    let b = BoundingBox::new([0.0; 3], [1.0, 2.0, 3.0], [Boundary::Periodic, Boundary::Open, Boundary::Periodic]).unwrap();
+    let b = BoundingBox::new(
+        [0.0; 3],
+        [1.0, 2.0, 3.0],
+        [Boundary::Periodic, Boundary::Open, Boundary::Periodic],
+    )
+    .unwrap();
     let p = b.wrap([1.25, 5.0, -0.5]);
     assert!((p[0] - 0.25).abs() < 1e-15);
     assert_eq!(p[1], 5.0);
