@@ -1,0 +1,107 @@
+//! Neighbour lists with the smoothing-length iteration: particles whose
+//! count falls outside `[ng0/4, ngmax + 1]` get a new h and are searched
+//! again, at most `max_iterations` times.
+
+use crate::integrate::HUpdate;
+use crate::CoreError;
+use sph_tree::{BoundingBox, NeighborList, NeighborSearch, NeighborStats, Octree};
+use std::ops::Range;
+
+/// Neighbour-count targets.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NeighborParams {
+    /// Target count, self included.
+    pub ng0: usize,
+    /// Largest count (self excluded) accepted without iterating h.
+    pub ngmax: usize,
+    /// Most re-searches per step.
+    pub max_iterations: usize,
+}
+
+impl Default for NeighborParams {
+    fn default() -> Self {
+        Self {
+            ng0: 100,
+            ngmax: 150,
+            max_iterations: 10,
+        }
+    }
+}
+
+impl NeighborParams {
+    /// Whether `nc` (self included) needs another h iteration.
+    #[inline]
+    pub fn out_of_range(&self, nc: usize) -> bool {
+        nc * 4 < self.ng0 || nc.saturating_sub(1) > self.ngmax
+    }
+
+    /// The h update rule with this target.
+    pub fn h_update(&self, base: HUpdate) -> HUpdate {
+        HUpdate {
+            ng0: self.ng0 as f64,
+            ..base
+        }
+    }
+}
+
+/// Builds the neighbour lists of `targets`, iterating h of the particles
+/// whose count is out of range. Writes the final counts into `nc` (indexed
+/// like the particles).
+#[allow(clippy::too_many_arguments)]
+pub fn find_neighbors(
+    params: &NeighborParams,
+    h_update: HUpdate,
+    tree: &Octree,
+    bbox: &BoundingBox,
+    x: &[f64],
+    y: &[f64],
+    z: &[f64],
+    h: &mut [f64],
+    ids: &[u64],
+    targets: Range<usize>,
+    list: &mut NeighborList,
+    nc: &mut [u32],
+    step: u64,
+) -> Result<NeighborStats, CoreError> {
+    let search = NeighborSearch::default();
+    let hu = params.h_update(h_update);
+    let mut iterations = 0;
+    loop {
+        let stats = search.find(tree, bbox, x, y, z, h, targets.clone(), list)?;
+        let mut bad = None;
+        for i in targets.clone() {
+            let c = list.count(i);
+            nc[i] = c as u32;
+            if params.out_of_range(c) {
+                bad.get_or_insert(i);
+            }
+        }
+        let Some(first) = bad else {
+            return Ok(stats);
+        };
+        if iterations == params.max_iterations {
+            return Err(CoreError::HIteration {
+                step,
+                id: ids[first],
+                iterations,
+                count: list.count(first),
+                min: params.ng0.div_ceil(4),
+                max: params.ngmax + 1,
+                h: h[first],
+            });
+        }
+        iterations += 1;
+        // Keep periodic searches within the minimum-image limit.
+        let lengths = bbox.lengths();
+        let hmax = (0..3)
+            .filter(|&k| bbox.is_periodic(k))
+            .map(|k| 0.249 * lengths[k])
+            .fold(f64::INFINITY, f64::min);
+        for i in targets.clone() {
+            let c = list.count(i);
+            if params.out_of_range(c) {
+                h[i] = (h[i] * hu.factor(c as u32)).min(hmax);
+            }
+        }
+    }
+}

@@ -1,0 +1,215 @@
+//! Particle storage: structure of arrays, `f64`, one `Vec` per field.
+//!
+//! Only the fields the chosen physics needs hold data: the IAD matrix is
+//! empty when plain kernel gradients are used, and the grad-h factor is
+//! empty when grad-h terms are off. Arrays are kept in space-filling-curve
+//! order by [`Particles::reorder`].
+
+use sph_tree::apply_permutation;
+
+/// Which optional fields a run needs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FieldSet {
+    /// The 6 components of the inverse IAD matrix.
+    pub iad: bool,
+    /// The grad-h factor Omega.
+    pub grad_h: bool,
+}
+
+impl Default for FieldSet {
+    fn default() -> Self {
+        Self {
+            iad: true,
+            grad_h: true,
+        }
+    }
+}
+
+/// All particles of one rank, one array per field.
+#[derive(Debug, Clone, Default)]
+pub struct Particles {
+    /// Unique particle id (stable across sorting and ranks).
+    pub id: Vec<u64>,
+    /// Position.
+    pub x: Vec<f64>,
+    /// Position.
+    pub y: Vec<f64>,
+    /// Position.
+    pub z: Vec<f64>,
+    /// Velocity.
+    pub vx: Vec<f64>,
+    /// Velocity.
+    pub vy: Vec<f64>,
+    /// Velocity.
+    pub vz: Vec<f64>,
+    /// Position change of the last step, `x_n - x_{n-1}` (Press integrator).
+    pub dx: Vec<f64>,
+    /// Position change of the last step.
+    pub dy: Vec<f64>,
+    /// Position change of the last step.
+    pub dz: Vec<f64>,
+    /// Smoothing length.
+    pub h: Vec<f64>,
+    /// Mass.
+    pub m: Vec<f64>,
+    /// Specific internal energy.
+    pub u: Vec<f64>,
+    /// Density.
+    pub rho: Vec<f64>,
+    /// Pressure.
+    pub p: Vec<f64>,
+    /// Sound speed.
+    pub c: Vec<f64>,
+    /// grad-h factor Omega (empty when grad-h is off).
+    pub omega: Vec<f64>,
+    /// Inverse IAD matrix, components xx, xy, xz, yy, yz, zz (empty for
+    /// plain kernel gradients).
+    pub iad: [Vec<f64>; 6],
+    /// Acceleration.
+    pub ax: Vec<f64>,
+    /// Acceleration.
+    pub ay: Vec<f64>,
+    /// Acceleration.
+    pub az: Vec<f64>,
+    /// du/dt of this step.
+    pub du: Vec<f64>,
+    /// du/dt of the previous step (Adams-Bashforth).
+    pub du_prev: Vec<f64>,
+    /// Neighbour count of the last search (self included), for the h update.
+    pub nc: Vec<u32>,
+    fields: FieldSet,
+}
+
+impl Particles {
+    /// `n` particles at rest at the origin, with the fields of `fields`.
+    pub fn new(n: usize, fields: FieldSet) -> Self {
+        let z = || vec![0.0; n];
+        let mut p = Self {
+            id: (0..n as u64).collect(),
+            x: z(),
+            y: z(),
+            z: z(),
+            vx: z(),
+            vy: z(),
+            vz: z(),
+            dx: z(),
+            dy: z(),
+            dz: z(),
+            h: z(),
+            m: z(),
+            u: z(),
+            rho: z(),
+            p: z(),
+            c: z(),
+            omega: Vec::new(),
+            iad: Default::default(),
+            ax: z(),
+            ay: z(),
+            az: z(),
+            du: z(),
+            du_prev: z(),
+            nc: vec![0; n],
+            fields,
+        };
+        if fields.grad_h {
+            p.omega = vec![1.0; n];
+        }
+        if fields.iad {
+            p.iad = std::array::from_fn(|_| vec![0.0; n]);
+        }
+        p
+    }
+
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.x.len()
+    }
+
+    /// Whether there are no particles.
+    pub fn is_empty(&self) -> bool {
+        self.x.is_empty()
+    }
+
+    /// The optional fields held.
+    pub fn fields(&self) -> FieldSet {
+        self.fields
+    }
+
+    fn f64_fields_mut(&mut self) -> Vec<&mut Vec<f64>> {
+        let mut v: Vec<&mut Vec<f64>> = vec![
+            &mut self.x,
+            &mut self.y,
+            &mut self.z,
+            &mut self.vx,
+            &mut self.vy,
+            &mut self.vz,
+            &mut self.dx,
+            &mut self.dy,
+            &mut self.dz,
+            &mut self.h,
+            &mut self.m,
+            &mut self.u,
+            &mut self.rho,
+            &mut self.p,
+            &mut self.c,
+            &mut self.ax,
+            &mut self.ay,
+            &mut self.az,
+            &mut self.du,
+            &mut self.du_prev,
+        ];
+        if !self.omega.is_empty() {
+            v.push(&mut self.omega);
+        }
+        for c in self.iad.iter_mut() {
+            if !c.is_empty() {
+                v.push(c);
+            }
+        }
+        v
+    }
+
+    /// Bytes held per particle by the particle arrays (not counting
+    /// neighbour lists or the tree).
+    pub fn bytes_per_particle(&mut self) -> usize {
+        let n_f64 = self.f64_fields_mut().len();
+        n_f64 * 8 + 8 /* id */ + 4 /* nc */
+    }
+
+    /// Reorders every field by `perm` (`field[i] <- field[perm[i]]`),
+    /// using the two scratch buffers (kept by the caller between steps, so
+    /// nothing is allocated once they have grown).
+    pub fn reorder(&mut self, perm: &[u32], scratch: &mut Vec<f64>, scratch_u64: &mut Vec<u64>) {
+        assert_eq!(perm.len(), self.len(), "permutation length");
+        for f in self.f64_fields_mut() {
+            apply_permutation(perm, f, scratch);
+        }
+        apply_permutation(perm, &mut self.id, scratch_u64);
+        // nc is recomputed by the next search.
+        self.nc.resize(perm.len(), 0);
+    }
+
+    /// Checks that every array has the same length.
+    pub fn check(&self) -> Result<(), crate::CoreError> {
+        let n = self.len();
+        let lens = [
+            ("id", self.id.len()),
+            ("y", self.y.len()),
+            ("z", self.z.len()),
+            ("vx", self.vx.len()),
+            ("vy", self.vy.len()),
+            ("vz", self.vz.len()),
+            ("h", self.h.len()),
+            ("m", self.m.len()),
+            ("u", self.u.len()),
+        ];
+        for (name, l) in lens {
+            if l != n {
+                return Err(crate::CoreError::Invalid(format!(
+                    "field {name} has {l} entries, x has {n}"
+                )));
+            }
+        }
+        Ok(())
+    }
+}

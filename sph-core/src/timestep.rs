@@ -1,0 +1,38 @@
+//! The global time step.
+
+use crate::momentum::MomentumStats;
+
+/// Time-step criteria (PHYSICS.md): Courant, density change, growth limit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TimestepParams {
+    /// Courant factor on `h / v_sig`.
+    pub k_courant: f64,
+    /// Factor on `1 / |div v|`.
+    pub k_rho: f64,
+    /// Largest growth factor from one step to the next.
+    pub max_growth: f64,
+}
+
+impl Default for TimestepParams {
+    fn default() -> Self {
+        Self {
+            k_courant: 0.2,
+            k_rho: 0.06,
+            max_growth: 1.1,
+        }
+    }
+}
+
+impl TimestepParams {
+    /// `dt = min(Kcour min h/v_sig, Krho / max|div v|, growth * dt_prev)`,
+    /// from stats already reduced over all particles (and ranks).
+    pub fn dt(&self, stats: &MomentumStats, dt_prev: f64) -> f64 {
+        let courant = self.k_courant * stats.min_h_over_vsig;
+        let div = if stats.max_abs_div_v > 0.0 {
+            self.k_rho / stats.max_abs_div_v
+        } else {
+            f64::INFINITY
+        };
+        courant.min(div).min(self.max_growth * dt_prev)
+    }
+}

@@ -1,0 +1,326 @@
+//! Property tests of the SPH stages: exactness of IAD, conservation by the
+//! pairwise forces, lattice density, integrator reversibility.
+
+use proptest::prelude::*;
+use sph_core::density::{density, Positions};
+use sph_core::iad::iad;
+use sph_core::integrate::integrate;
+use sph_core::momentum::{momentum_energy, Gradients, HydroState, Rates};
+use sph_core::{Eos, FieldSet, Particles};
+use sph_kernels::{Sinc, Tabulated};
+use sph_tree::{
+    apply_permutation, compute_keys, Boundary, BoundingBox, Curve, KeySorter, NeighborList,
+    NeighborSearch, Octree,
+};
+
+struct Rng(u64);
+impl Rng {
+    fn uniform(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+fn kernel() -> Tabulated {
+    Tabulated::new(&Sinc::new(6.0).unwrap(), Tabulated::DEFAULT_POINTS).unwrap()
+}
+
+/// An n^3 lattice in the periodic box [-0.5, 0.5)^3, each particle moved by
+/// up to `jitter` lattice spacings, sorted along the curve, with h for about
+/// `ng` neighbours, unit total mass and the neighbour lists built.
+struct Setup {
+    p: Particles,
+    bbox: BoundingBox,
+    list: NeighborList,
+}
+
+fn lattice(n: usize, jitter: f64, ng: f64, seed: u64) -> Setup {
+    let mut rng = Rng(seed);
+    let np = n * n * n;
+    let mut p = Particles::new(np, FieldSet::default());
+    let dx = 1.0 / n as f64;
+    let bbox = BoundingBox::cube(-0.5, 0.5, Boundary::Periodic).unwrap();
+    for i in 0..np {
+        let c = [i % n, i / n % n, i / (n * n)];
+        let mut q = [0.0; 3];
+        for k in 0..3 {
+            q[k] = (c[k] as f64 + 0.5) * dx - 0.5 + jitter * dx * (rng.uniform() - 0.5);
+        }
+        let q = bbox.wrap(q);
+        (p.x[i], p.y[i], p.z[i]) = (q[0], q[1], q[2]);
+        p.m[i] = 1.0 / np as f64;
+        p.h[i] = 0.5 * (3.0 * ng / (4.0 * std::f64::consts::PI * np as f64)).cbrt();
+    }
+    let mut keys = Vec::new();
+    compute_keys(&bbox, Curve::Hilbert, &p.x, &p.y, &p.z, &mut keys);
+    let mut perm = Vec::new();
+    KeySorter::new().sort(&keys, None, &mut perm);
+    p.reorder(&perm, &mut Vec::new(), &mut Vec::new());
+    apply_permutation(&perm, &mut keys, &mut Vec::new());
+    let tree = Octree::build(&keys, &p.x, &p.y, &p.z, 16).unwrap();
+    let mut list = NeighborList::new();
+    NeighborSearch::default()
+        .find(&tree, &bbox, &p.x, &p.y, &p.z, &p.h, 0..np, &mut list)
+        .unwrap();
+    Setup { p, bbox, list }
+}
+
+fn compute_density(s: &mut Setup) {
+    let p = &mut s.p;
+    let pos = Positions {
+        x: &p.x,
+        y: &p.y,
+        z: &p.z,
+        h: &p.h,
+        m: &p.m,
+    };
+    density(&kernel(), &s.bbox, pos, &s.list, &mut p.rho, &mut p.omega);
+}
+
+fn compute_iad(s: &mut Setup) {
+    let p = &mut s.p;
+    let pos = Positions {
+        x: &p.x,
+        y: &p.y,
+        z: &p.z,
+        h: &p.h,
+        m: &p.m,
+    };
+    iad(&kernel(), &s.bbox, pos, &p.rho, &s.list, &mut p.iad).unwrap();
+}
+
+fn compute_forces(s: &mut Setup, gradients: Gradients) {
+    let p = &mut s.p;
+    Eos::IdealGas { gamma: 5.0 / 3.0 }.apply(&p.rho, &p.u, &mut p.p, &mut p.c);
+    let pos = Positions {
+        x: &p.x,
+        y: &p.y,
+        z: &p.z,
+        h: &p.h,
+        m: &p.m,
+    };
+    let state = HydroState {
+        pos,
+        vx: &p.vx,
+        vy: &p.vy,
+        vz: &p.vz,
+        rho: &p.rho,
+        p: &p.p,
+        c: &p.c,
+        omega: &p.omega,
+        iad: std::array::from_fn(|k| p.iad[k].as_slice()),
+    };
+    let rates = Rates {
+        ax: &mut p.ax,
+        ay: &mut p.ay,
+        az: &mut p.az,
+        du: &mut p.du,
+    };
+    momentum_energy(&kernel(), &s.bbox, state, gradients, 1.0, &s.list, rates);
+}
+
+/// IAD gradient of f at particle i: sum_j V_j (f_j - f_i) C_i (x_j - x_i) W_ij.
+fn iad_gradient(s: &Setup, f: &dyn Fn([f64; 3]) -> f64, i: usize) -> [f64; 3] {
+    use sph_kernels::Kernel;
+    let p = &s.p;
+    let k = kernel();
+    let pi = [p.x[i], p.y[i], p.z[i]];
+    let c = std::array::from_fn::<f64, 6, _>(|q| p.iad[q][i]);
+    let mut g = [0.0; 3];
+    for &j in s.list.neighbors(i) {
+        let j = j as usize;
+        // x_j - x_i through the periodic boundary; f is evaluated at the
+        // unwrapped image so a linear field stays linear.
+        let d = s
+            .bbox
+            .min_image([p.x[j] - pi[0], p.y[j] - pi[1], p.z[j] - pi[2]]);
+        let xj = [pi[0] + d[0], pi[1] + d[1], pi[2] + d[2]];
+        let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let w = k.w(r, p.h[i]) * p.m[j] / p.rho[j] * (f(xj) - f(pi));
+        g[0] += w * (c[0] * d[0] + c[1] * d[1] + c[2] * d[2]);
+        g[1] += w * (c[1] * d[0] + c[3] * d[1] + c[4] * d[2]);
+        g[2] += w * (c[2] * d[0] + c[4] * d[1] + c[5] * d[2]);
+    }
+    g
+}
+
+#[test]
+fn lattice_density_within_one_percent() {
+    let mut s = lattice(16, 0.0, 100.0, 1);
+    compute_density(&mut s);
+    for (i, &r) in s.p.rho.iter().enumerate() {
+        assert!((r - 1.0).abs() < 0.01, "particle {i}: rho = {r}");
+    }
+}
+
+#[test]
+fn iad_exact_for_linear_field_on_lattice_and_perturbed_lattice() {
+    let grad = [0.7, -1.3, 2.1];
+    let f = move |x: [f64; 3]| 3.0 + grad[0] * x[0] + grad[1] * x[1] + grad[2] * x[2];
+    for jitter in [0.0, 0.6] {
+        // 0.6 spacings peak to peak = +-30% perturbation.
+        let mut s = lattice(12, jitter, 100.0, 7);
+        compute_density(&mut s);
+        compute_iad(&mut s);
+        let mut worst: f64 = 0.0;
+        for i in 0..s.p.len() {
+            let g = iad_gradient(&s, &f, i);
+            for k in 0..3 {
+                worst = worst.max((g[k] - grad[k]).abs() / 2.1);
+            }
+        }
+        assert!(
+            worst < 1e-12,
+            "jitter {jitter}: max relative error {worst:e}"
+        );
+    }
+}
+
+#[test]
+fn plain_kernel_gradients_are_not_exact_on_perturbed_lattice() {
+    use sph_kernels::Kernel;
+    let mut s = lattice(12, 0.6, 100.0, 7);
+    compute_density(&mut s);
+    let k = kernel();
+    let p = &s.p;
+    let mut worst: f64 = 0.0;
+    for i in 0..p.len() {
+        // sum_j V_j (f_j - f_i) grad_i W for f = x (exact answer (1,0,0)).
+        let pi = [p.x[i], p.y[i], p.z[i]];
+        let mut gx = 0.0;
+        for &j in s.list.neighbors(i) {
+            let j = j as usize;
+            let d = s
+                .bbox
+                .min_image([pi[0] - p.x[j], pi[1] - p.y[j], pi[2] - p.z[j]]);
+            let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            if r > 0.0 {
+                gx += p.m[j] / p.rho[j] * (-d[0]) * k.dw_dr(r, p.h[i]) * d[0] / r;
+            }
+        }
+        worst = worst.max((gx - 1.0).abs());
+    }
+    assert!(worst > 1e-3, "plain gradient error only {worst:e}");
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(12))]
+
+    /// Pairwise antisymmetry: one force evaluation changes the total
+    /// momentum by round-off only, and the pressure + viscous work balances
+    /// the kinetic energy change (total energy rate ~ 0).
+    #[test]
+    fn forces_conserve_momentum_and_energy(seed in any::<u64>(), iad_grad in any::<bool>()) {
+        let mut s = lattice(10, 0.8, 60.0, seed);
+        let mut rng = Rng(seed ^ 0xABCD);
+        for i in 0..s.p.len() {
+            s.p.vx[i] = rng.uniform() - 0.5;
+            s.p.vy[i] = rng.uniform() - 0.5;
+            s.p.vz[i] = rng.uniform() - 0.5;
+            s.p.u[i] = 1.0 + rng.uniform();
+            s.p.h[i] *= 1.0 + 0.2 * (rng.uniform() - 0.5);
+        }
+        let gradients = if iad_grad { Gradients::Iad } else { Gradients::Kernel };
+        compute_density(&mut s);
+        compute_iad(&mut s);
+        compute_forces(&mut s, gradients);
+        let p = &s.p;
+        let mut mom = [0.0; 3];
+        let mut scale = 0.0;
+        let mut de = 0.0;
+        let mut de_scale = 0.0;
+        for i in 0..p.len() {
+            let a = [p.ax[i], p.ay[i], p.az[i]];
+            for k in 0..3 {
+                mom[k] += p.m[i] * a[k];
+                scale += p.m[i] * a[k].abs();
+            }
+            let work = p.m[i] * (p.vx[i] * a[0] + p.vy[i] * a[1] + p.vz[i] * a[2]);
+            de += work + p.m[i] * p.du[i];
+            de_scale += work.abs() + (p.m[i] * p.du[i]).abs();
+        }
+        for k in 0..3 {
+            prop_assert!(mom[k].abs() < 1e-13 * scale, "momentum {:e} vs {:e}", mom[k], scale);
+        }
+        prop_assert!(de.abs() < 1e-12 * de_scale, "energy rate {:e} vs {:e}", de, de_scale);
+    }
+}
+
+/// Viscosity only heats: with zero pressure the energy rate is >= 0 per pair
+/// sum and equals minus the kinetic energy change.
+#[test]
+fn viscosity_is_dissipative() {
+    let mut s = lattice(10, 0.5, 60.0, 3);
+    for i in 0..s.p.len() {
+        // Converging flow.
+        s.p.vx[i] = -s.p.x[i];
+        s.p.vy[i] = -s.p.y[i];
+        s.p.vz[i] = -s.p.z[i];
+        s.p.u[i] = 1e-12;
+    }
+    compute_density(&mut s);
+    compute_iad(&mut s);
+    compute_forces(&mut s, Gradients::Iad);
+    let heat: f64 = (0..s.p.len()).map(|i| s.p.m[i] * s.p.du[i]).sum();
+    assert!(heat > 0.0);
+}
+
+/// Press + Adams-Bashforth run N steps forward and N back with -dt in a
+/// harmonic potential return to the start to round-off.
+#[test]
+fn integrator_is_time_reversible() {
+    let n = 50;
+    let mut rng = Rng(5);
+    let mut p = Particles::new(
+        n,
+        FieldSet {
+            iad: false,
+            grad_h: false,
+        },
+    );
+    let bbox = BoundingBox::cube(-10.0, 10.0, Boundary::Open).unwrap();
+    for i in 0..n {
+        p.x[i] = rng.uniform() - 0.5;
+        p.y[i] = rng.uniform() - 0.5;
+        p.z[i] = rng.uniform() - 0.5;
+        p.vx[i] = rng.uniform() - 0.5;
+        p.u[i] = 1.0;
+    }
+    let start = (p.x.clone(), p.y.clone(), p.z.clone());
+    let dt = 1e-3;
+    for i in 0..n {
+        p.dx[i] = p.vx[i] * dt;
+        p.dy[i] = p.vy[i] * dt;
+        p.dz[i] = p.vz[i] * dt;
+    }
+    let forces = |p: &mut Particles| {
+        for i in 0..p.len() {
+            p.ax[i] = -p.x[i];
+            p.ay[i] = -p.y[i];
+            p.az[i] = -p.z[i];
+        }
+    };
+    // Forward: dt_prev = dt throughout.
+    for s in 0..200 {
+        forces(&mut p);
+        integrate(&mut p, &bbox, dt, dt, None, s).unwrap();
+    }
+    // Backward: the first reverse step still has dt_prev = +dt.
+    forces(&mut p);
+    integrate(&mut p, &bbox, -dt, dt, None, 200).unwrap();
+    for s in 1..200 {
+        forces(&mut p);
+        integrate(&mut p, &bbox, -dt, -dt, None, 200 + s).unwrap();
+    }
+    let mut worst: f64 = 0.0;
+    for i in 0..n {
+        worst = worst
+            .max((p.x[i] - start.0[i]).abs())
+            .max((p.y[i] - start.1[i]).abs())
+            .max((p.z[i] - start.2[i]).abs());
+    }
+    assert!(worst < 1e-12, "max position error {worst:e}");
+}
