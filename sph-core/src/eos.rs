@@ -3,6 +3,15 @@
 
 use rayon::prelude::*;
 
+/// Tait pressure and sound speed about `(rho0, p0)`.
+#[inline]
+fn tait(rho: f64, rho0: f64, c0: f64, p0: f64) -> (f64, f64) {
+    let s = rho / rho0;
+    let s3 = s * s * s;
+    let s7 = s3 * s3 * s;
+    (rho0 * c0 * c0 / 7.0 * (s7 - 1.0) + p0, c0 * s3)
+}
+
 /// An equation of state.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Eos {
@@ -33,6 +42,15 @@ pub enum Eos {
         /// Background pressure.
         p0: f64,
     },
+    /// Tait EOS relative to each particle's own reference state (the
+    /// SPH-EXA square patch): `P = c0^2/7 rho_ref,i ((rho/rho_ref,i)^7 - 1) + p_ref,i`
+    /// with `rho_ref` the particle's density at the first step (calibrated
+    /// by the pipeline) and `p_ref` its initial pressure, `c = c0 (rho/rho_ref)^3`.
+    /// Needs [`Particles::eos_ref`](crate::Particles).
+    TaitReferenced {
+        /// Reference sound speed.
+        c0: f64,
+    },
 }
 
 impl Eos {
@@ -49,13 +67,25 @@ impl Eos {
                 let p = k * rho.powf(gamma);
                 (p, (gamma * p / rho).sqrt())
             }
-            Eos::Tait { rho0, c0, p0 } => {
-                let s = rho / rho0;
-                let s3 = s * s * s;
-                let s7 = s3 * s3 * s;
-                (rho0 * c0 * c0 / 7.0 * (s7 - 1.0) + p0, c0 * s3)
-            }
+            Eos::Tait { rho0, c0, p0 } => tait(rho, rho0, c0, p0),
+            Eos::TaitReferenced { c0 } => tait(rho, rho, c0, 0.0),
         }
+    }
+
+    /// Pressure and sound speed with a per-particle reference state
+    /// `(rho_ref, p_ref)`, used by [`Eos::TaitReferenced`] (other variants
+    /// ignore it).
+    #[inline]
+    pub fn pressure_sound_ref(&self, rho: f64, u: f64, rho_ref: f64, p_ref: f64) -> (f64, f64) {
+        match *self {
+            Eos::TaitReferenced { c0 } => tait(rho, rho_ref, c0, p_ref),
+            _ => self.pressure_sound(rho, u),
+        }
+    }
+
+    /// Whether the EOS needs a per-particle reference state.
+    pub fn needs_reference(&self) -> bool {
+        matches!(self, Eos::TaitReferenced { .. })
     }
 
     /// Checks the parameters.
@@ -69,6 +99,7 @@ impl Eos {
             Eos::Tait { rho0, c0, p0 } => {
                 rho0 > 0.0 && c0 > 0.0 && p0.is_finite() && rho0.is_finite() && c0.is_finite()
             }
+            Eos::TaitReferenced { c0 } => c0 > 0.0 && c0.is_finite(),
         };
         if ok {
             Ok(())
@@ -79,8 +110,26 @@ impl Eos {
         }
     }
 
-    /// Fills `p` and `c` for every particle (parallel).
-    pub fn apply(&self, rho: &[f64], u: &[f64], p: &mut [f64], c: &mut [f64]) {
+    /// Fills `p` and `c` for every particle (parallel); `reference` holds
+    /// the per-particle `(rho_ref, p_ref)` arrays when
+    /// [`Eos::needs_reference`].
+    pub fn apply(
+        &self,
+        rho: &[f64],
+        u: &[f64],
+        reference: Option<(&[f64], &[f64])>,
+        p: &mut [f64],
+        c: &mut [f64],
+    ) {
+        if let Some((rr, pr)) = reference {
+            p.par_iter_mut()
+                .zip(c.par_iter_mut())
+                .enumerate()
+                .for_each(|(i, (p, c))| {
+                    (*p, *c) = self.pressure_sound_ref(rho[i], u[i], rr[i], pr[i]);
+                });
+            return;
+        }
         p.par_iter_mut()
             .zip(c.par_iter_mut())
             .zip(rho.par_iter().zip(u.par_iter()))

@@ -110,6 +110,7 @@ pub struct Hydro<K: Kernel> {
     step: u64,
     t: f64,
     dt_prev: f64,
+    dt_cap: f64,
 }
 
 impl<K: Kernel> Hydro<K> {
@@ -139,6 +140,7 @@ impl<K: Kernel> Hydro<K> {
             step: 0,
             t: t0,
             dt_prev: dt0,
+            dt_cap: f64::INFINITY,
         })
     }
 
@@ -166,6 +168,11 @@ impl<K: Kernel> Hydro<K> {
     /// Steps done.
     pub fn steps(&self) -> u64 {
         self.step
+    }
+
+    /// Caps the next step (to land exactly on an output or end time).
+    pub fn limit_next_dt(&mut self, dt_max: f64) {
+        self.dt_cap = dt_max;
     }
 
     /// The last step size.
@@ -252,7 +259,26 @@ impl<K: Kernel> Hydro<K> {
         );
         lap(3, &mut times);
 
-        self.config.eos.apply(&p.rho, &p.u, &mut p.p, &mut p.c);
+        let reference = if self.config.eos.needs_reference() {
+            if p.eos_ref[0].len() != n || p.eos_ref[1].len() != n {
+                return Err(CoreError::Invalid(format!(
+                    "equation of state {:?} needs per-particle reference density and pressure (eos_ref) for all {n} particles",
+                    self.config.eos
+                )));
+            }
+            // Calibrate reference densities left at zero to the first evaluation.
+            for i in 0..n {
+                if p.eos_ref[0][i] == 0.0 {
+                    p.eos_ref[0][i] = p.rho[i];
+                }
+            }
+            Some((p.eos_ref[0].as_slice(), p.eos_ref[1].as_slice()))
+        } else {
+            None
+        };
+        self.config
+            .eos
+            .apply(&p.rho, &p.u, reference, &mut p.p, &mut p.c);
         lap(4, &mut times);
 
         if self.config.gradients == Gradients::Iad {
@@ -303,7 +329,12 @@ impl<K: Kernel> Hydro<K> {
         let conserved = Conserved::compute(p, n);
         lap(7, &mut times);
 
-        let dt = self.config.timestep.dt(&mstats, self.dt_prev);
+        let dt = self
+            .config
+            .timestep
+            .dt(&mstats, self.dt_prev)
+            .min(self.dt_cap);
+        self.dt_cap = f64::INFINITY;
         let h_update = self.config.neighbors.h_update(self.config.h_update);
         let report = integrate(p, bbox, dt, self.dt_prev, Some(h_update), step)?;
         lap(8, &mut times);
@@ -321,6 +352,64 @@ impl<K: Kernel> Hydro<K> {
             times,
             energy_fallbacks: report.energy_fallbacks,
         })
+    }
+}
+
+impl<K: Kernel> Hydro<K> {
+    /// Recomputes neighbours, density and pressure at the current positions
+    /// without advancing (for observables at the end of a run).
+    pub fn evaluate_density(
+        &mut self,
+        p: &mut Particles,
+        bbox: &mut BoundingBox,
+    ) -> Result<(), CoreError> {
+        let n = p.len();
+        refit_open_axes(bbox, p)?;
+        compute_keys(bbox, self.config.curve, &p.x, &p.y, &p.z, &mut self.keys);
+        self.sorter.sort(&self.keys, Some(&p.id), &mut self.perm);
+        p.reorder(&self.perm, &mut self.scratch, &mut self.scratch_u64);
+        sph_tree::apply_permutation(&self.perm, &mut self.keys, &mut self.scratch_u64);
+        self.tree
+            .rebuild(&self.keys, &p.x, &p.y, &p.z, self.config.bucket)?;
+        find_neighbors(
+            &self.config.neighbors,
+            self.config.h_update,
+            &self.tree,
+            bbox,
+            &p.x,
+            &p.y,
+            &p.z,
+            &mut p.h,
+            &p.id,
+            0..n,
+            &mut self.list,
+            &mut p.nc,
+            self.step,
+        )?;
+        let pos = Positions {
+            x: &p.x,
+            y: &p.y,
+            z: &p.z,
+            h: &p.h,
+            m: &p.m,
+        };
+        density(
+            &self.kernel,
+            bbox,
+            pos,
+            &self.list,
+            &mut p.rho,
+            &mut p.omega,
+        );
+        let reference = if self.config.eos.needs_reference() && p.eos_ref[0].len() == n {
+            Some((p.eos_ref[0].as_slice(), p.eos_ref[1].as_slice()))
+        } else {
+            None
+        };
+        self.config
+            .eos
+            .apply(&p.rho, &p.u, reference, &mut p.p, &mut p.c);
+        Ok(())
     }
 }
 

@@ -75,6 +75,10 @@ pub struct Particles {
     pub du: Vec<f64>,
     /// du/dt of the previous step (Adams-Bashforth).
     pub du_prev: Vec<f64>,
+    /// Per-particle reference density and pressure of
+    /// [`Eos::TaitReferenced`](crate::Eos) (empty otherwise); a zero
+    /// density is calibrated from the first density evaluation.
+    pub eos_ref: [Vec<f64>; 2],
     /// Neighbour count of the last search (self included), for the h update.
     pub nc: Vec<u32>,
     fields: FieldSet,
@@ -108,6 +112,7 @@ impl Particles {
             az: z(),
             du: z(),
             du_prev: z(),
+            eos_ref: Default::default(),
             nc: vec![0; n],
             fields,
         };
@@ -161,7 +166,7 @@ impl Particles {
         if !self.omega.is_empty() {
             v.push(&mut self.omega);
         }
-        for c in self.iad.iter_mut() {
+        for c in self.iad.iter_mut().chain(self.eos_ref.iter_mut()) {
             if !c.is_empty() {
                 v.push(c);
             }
@@ -171,8 +176,13 @@ impl Particles {
 
     /// Bytes held per particle by the particle arrays (not counting
     /// neighbour lists or the tree).
-    pub fn bytes_per_particle(&mut self) -> usize {
-        let n_f64 = self.f64_fields_mut().len();
+    pub fn bytes_per_particle(&self) -> usize {
+        let optional = std::iter::once(&self.omega)
+            .chain(self.iad.iter())
+            .chain(self.eos_ref.iter())
+            .filter(|v| !v.is_empty())
+            .count();
+        let n_f64 = 20 + optional;
         n_f64 * 8 + 8 /* id */ + 4 /* nc */
     }
 

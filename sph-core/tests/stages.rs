@@ -94,7 +94,7 @@ fn compute_iad(s: &mut Setup) {
 
 fn compute_forces(s: &mut Setup, gradients: Gradients) {
     let p = &mut s.p;
-    Eos::IdealGas { gamma: 5.0 / 3.0 }.apply(&p.rho, &p.u, &mut p.p, &mut p.c);
+    Eos::IdealGas { gamma: 5.0 / 3.0 }.apply(&p.rho, &p.u, None, &mut p.p, &mut p.c);
     let pos = Positions {
         x: &p.x,
         y: &p.y,

@@ -1,0 +1,244 @@
+//! `sphexa`: run the SPH-EXA test cases from the command line.
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use sph_apps::cases::{self, CASES};
+use sph_apps::simulation::{Progress, Stop};
+use sph_apps::{AppError, Simulation};
+use sph_core::{Gradients, HydroConfig};
+use sph_kernels::{KernelChoice, Tabulated};
+use sph_tree::Curve;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Smoothed Particle Hydrodynamics (the SPH-EXA scheme) on one node.
+#[derive(Parser, Debug)]
+#[command(version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Run a test case and write its outputs (conserved.csv, timings.csv,
+    /// profile.csv, summary.json) into --out.
+    Run(RunArgs),
+    /// List the test cases.
+    Cases,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+enum GradientArg {
+    /// Integral approach to derivatives (exact for linear fields).
+    Iad,
+    /// Plain kernel gradients.
+    Kernel,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+enum CurveArg {
+    /// Hilbert curve.
+    Hilbert,
+    /// Morton (Z-order) curve.
+    Morton,
+}
+
+#[derive(Args, Debug)]
+struct RunArgs {
+    /// Test case (see `sphexa cases`).
+    case: String,
+    /// Particles per side of the initial lattice (default: the case's).
+    #[arg(short = 'n', long = "side")]
+    side: Option<usize>,
+    /// Number of steps to run.
+    #[arg(long, conflicts_with = "end_time")]
+    steps: Option<u64>,
+    /// Simulated time to reach (default: the case's).
+    #[arg(long = "end-time")]
+    end_time: Option<f64>,
+    /// Output folder (default: out/<case>).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Kernel: sinc[:n] (n >= 1, default 6), m4, wendland-c2, wendland-c4, wendland-c6.
+    #[arg(long, default_value = "sinc:6")]
+    kernel: String,
+    /// Target neighbour count, self included.
+    #[arg(long, default_value_t = 100)]
+    ng0: usize,
+    /// Largest accepted neighbour count before h is iterated.
+    #[arg(long, default_value_t = 150)]
+    ngmax: usize,
+    /// Gradient operator.
+    #[arg(long, value_enum, default_value = "iad")]
+    gradients: GradientArg,
+    /// Space-filling curve for sorting particles.
+    #[arg(long, value_enum, default_value = "hilbert")]
+    curve: CurveArg,
+    /// Artificial viscosity strength alpha.
+    #[arg(long, default_value_t = 1.0)]
+    alpha: f64,
+    /// Courant factor.
+    #[arg(long, default_value_t = 0.2)]
+    courant: f64,
+    /// No progress output.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Cases => {
+            println!(
+                "{:<14} {:>6} {:>9}  description",
+                "case", "side", "end time"
+            );
+            for c in CASES {
+                println!(
+                    "{:<14} {:>6} {:>9}  {}",
+                    c.name, c.default_side, c.default_end_time, c.description
+                );
+            }
+            ExitCode::SUCCESS
+        }
+        Command::Run(args) => match run(args) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::FAILURE
+            }
+        },
+    }
+}
+
+fn run(a: RunArgs) -> Result<(), AppError> {
+    let info = cases::find(&a.case).ok_or_else(|| {
+        let names: Vec<&str> = CASES.iter().map(|c| c.name).collect();
+        AppError::Usage(format!(
+            "unknown case '{}'; available: {}",
+            a.case,
+            names.join(", ")
+        ))
+    })?;
+    let side = a.side.unwrap_or(info.default_side);
+    if side < 4 {
+        return Err(AppError::Usage(format!(
+            "--side {side} is too small: at least 4 particles per side are needed"
+        )));
+    }
+    if side > 1000 {
+        return Err(AppError::Usage(format!(
+            "--side {side} is too large (at most 1000)"
+        )));
+    }
+    if let Some(t) = a.end_time {
+        if !(t > 0.0 && t.is_finite()) {
+            return Err(AppError::Usage(format!(
+                "--end-time {t} must be a positive number"
+            )));
+        }
+    }
+    if a.steps == Some(0) {
+        return Err(AppError::Usage("--steps must be at least 1".into()));
+    }
+    if a.ng0 < 8 || a.ng0 > a.ngmax {
+        return Err(AppError::Usage(format!(
+            "--ng0 {} must be at least 8 and at most --ngmax {}",
+            a.ng0, a.ngmax
+        )));
+    }
+    if !(a.alpha >= 0.0 && a.alpha.is_finite()) {
+        return Err(AppError::Usage(format!("--alpha {} must be >= 0", a.alpha)));
+    }
+    if !(a.courant > 0.0 && a.courant <= 1.0) {
+        return Err(AppError::Usage(format!(
+            "--courant {} must be in (0, 1]",
+            a.courant
+        )));
+    }
+    if let Some(t) = a.threads {
+        if t == 0 {
+            return Err(AppError::Usage("--threads must be at least 1".into()));
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build_global()
+            .map_err(|e| AppError::Usage(format!("cannot start {t} threads: {e}")))?;
+    }
+    let kernel_choice: KernelChoice = a.kernel.parse()?;
+    let kernel: Tabulated = kernel_choice.tabulate(Tabulated::DEFAULT_POINTS)?;
+
+    let mut config = HydroConfig {
+        gradients: match a.gradients {
+            GradientArg::Iad => Gradients::Iad,
+            GradientArg::Kernel => Gradients::Kernel,
+        },
+        curve: match a.curve {
+            CurveArg::Hilbert => Curve::Hilbert,
+            CurveArg::Morton => Curve::Morton,
+        },
+        alpha: a.alpha,
+        ..HydroConfig::default()
+    };
+    config.neighbors.ng0 = a.ng0;
+    config.neighbors.ngmax = a.ngmax;
+    config.timestep.k_courant = a.courant;
+
+    let scene = match info.name {
+        "sedov" => cases::sedov::setup(side, config)?,
+        "noh" => cases::noh::setup(side, config)?,
+        "square-patch" => cases::square_patch::setup(side, config)?,
+        other => return Err(AppError::Usage(format!("case {other} has no set-up"))),
+    };
+    let stop = match (a.steps, a.end_time) {
+        (Some(s), _) => Stop::Steps(s),
+        (None, Some(t)) => Stop::Time(t),
+        (None, None) => Stop::Time(info.default_end_time),
+    };
+    let out = a
+        .out
+        .unwrap_or_else(|| PathBuf::from("out").join(info.name));
+    let n = scene.particles.len();
+    if !a.quiet {
+        eprintln!(
+            "sphexa: {} with {n} particles, kernel {kernel_choice}, {} threads, output in {}",
+            info.name,
+            rayon::current_num_threads(),
+            out.display()
+        );
+    }
+    let mut sim = Simulation::new(scene, kernel, kernel_choice.to_string())?;
+    let progress = if a.quiet {
+        Progress::Quiet
+    } else {
+        Progress::Auto
+    };
+    let s = sim.run(stop, &out, progress)?;
+    println!(
+        "{}: {} particles, {} steps to t = {:.4}, {:.1} s wall, {:.3e} particle-steps/s, peak RSS {:.0} MB",
+        s.case,
+        s.particles,
+        s.steps,
+        s.t_end,
+        s.wall_s,
+        s.particle_steps_per_s,
+        s.peak_rss_bytes as f64 / 1e6
+    );
+    if let Some(l1) = s.l1 {
+        println!("L1: rho {:.4e}  p {:.4e}  |v| {:.4e}", l1.rho, l1.p, l1.v);
+    }
+    if let (Some(r), Some(rr)) = (s.shock_radius, s.shock_radius_ref) {
+        println!(
+            "shock radius {r:.4} (reference {rr:.4}), peak density {:.3}",
+            s.peak_density
+        );
+    }
+    println!(
+        "energy drift {:.3e}, momentum drift {:.3e}, angular momentum drift {:.3e}",
+        s.energy_rel_drift, s.momentum_rel_drift, s.angular_momentum_rel_drift
+    );
+    Ok(())
+}

@@ -1,0 +1,70 @@
+//! The SPH-EXA test cases, their analytic references, the [`Simulation`]
+//! that runs them, and the `sphexa` command-line driver.
+//!
+//! ```no_run
+//! use sph_apps::{cases, Simulation, simulation::{Progress, Stop}};
+//! use sph_core::HydroConfig;
+//! use sph_kernels::KernelChoice;
+//!
+//! let scene = cases::sedov::setup(20, HydroConfig::default()).unwrap();
+//! let kernel = KernelChoice::default().tabulate(20_000).unwrap();
+//! let mut sim = Simulation::new(scene, kernel, "sinc:6".into()).unwrap();
+//! let summary = sim
+//!     .run(Stop::Time(0.01), std::path::Path::new("out/sedov"), Progress::Quiet)
+//!     .unwrap();
+//! println!("L1(rho) = {:?}", summary.l1);
+//! ```
+//!
+//! The reference solutions are usable on their own:
+//!
+//! ```
+//! let sedov = sph_apps::reference::Sedov::spherical(5.0 / 3.0, 1.0, 1.0).unwrap();
+//! assert!((sedov.shock_radius(0.05) - 0.3475).abs() < 1e-3);
+//! ```
+
+pub mod analysis;
+pub mod cases;
+pub mod reference;
+pub mod simulation;
+
+pub use simulation::{Simulation, Summary};
+
+use std::path::Path;
+
+/// Why a run could not start or had to stop.
+#[derive(Debug, thiserror::Error)]
+pub enum AppError {
+    /// Bad user input.
+    #[error("{0}")]
+    Usage(String),
+    /// A file could not be written or read.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// The physics stopped (numerical failure).
+    #[error(transparent)]
+    Core(#[from] sph_core::CoreError),
+    /// A box or tree problem.
+    #[error(transparent)]
+    Tree(#[from] sph_tree::TreeError),
+    /// A bad kernel choice.
+    #[error(transparent)]
+    Kernel(#[from] sph_kernels::KernelError),
+    /// A bad reference-solution parameter.
+    #[error(transparent)]
+    Reference(#[from] reference::ReferenceError),
+}
+
+impl AppError {
+    /// An I/O error on `path`.
+    pub fn io(path: &Path, source: std::io::Error) -> Self {
+        AppError::Io {
+            path: path.display().to_string(),
+            source,
+        }
+    }
+}
