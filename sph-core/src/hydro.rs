@@ -35,6 +35,9 @@ pub struct HydroConfig {
     pub curve: Curve,
     /// Octree bucket size.
     pub bucket: usize,
+    /// Whether the grad-h factor Omega enters the equations (its field is
+    /// only allocated then).
+    pub grad_h: bool,
 }
 
 impl Default for HydroConfig {
@@ -48,6 +51,7 @@ impl Default for HydroConfig {
             timestep: TimestepParams::default(),
             curve: Curve::Hilbert,
             bucket: 16,
+            grad_h: true,
         }
     }
 }

@@ -36,7 +36,7 @@ pub fn invert_symmetric(t: [f64; 6]) -> Result<[f64; 6], f64> {
     let c01 = a[2] * a[4] - a[1] * a[5];
     let c02 = a[1] * a[4] - a[2] * a[3];
     let det = a[0] * c00 + a[1] * c01 + a[2] * c02;
-    if !(det.abs() > 1e-10) {
+    if det.abs().is_nan() || det.abs() <= 1e-10 {
         return Err(det);
     }
     let c11 = a[0] * a[5] - a[2] * a[2];

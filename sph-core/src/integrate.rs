@@ -26,12 +26,14 @@ pub struct HUpdate {
 
 impl Default for HUpdate {
     fn default() -> Self {
-        // The 2020 code's constants: 0.5 * 8^(1/3) = 1 at nc = ng0; the
-        // response d ln h / d ln nc = -7/24 is close to the ideal -1/3.
+        // SPH-EXA's current constants: 0.5 * 1024^(1/10) = 1 at nc = ng0,
+        // and a gentle response (d ln h / d ln nc = -0.1) that does not
+        // flip h between lattice shells every step, as the 2020 constants
+        // (c = 7, p = 3) do.
         Self {
             ng0: 100.0,
-            c: 7.0,
-            p: 3.0,
+            c: 1023.0,
+            p: 10.0,
         }
     }
 }
@@ -120,10 +122,10 @@ pub fn integrate(
             let d = du[i];
             let mut fallback = 0;
             let mut un = *u + d * dt + 0.5 * (d - *du_prev) / dt_prev * dt * dt;
-            if !(un >= 0.0) {
+            if un.is_nan() || un < 0.0 {
                 fallback = 1;
                 un = *u + d * dt;
-                if !(un >= 0.0) {
+                if un.is_nan() || un < 0.0 {
                     return Err(CoreError::NegativeEnergy {
                         step,
                         id: id[i],

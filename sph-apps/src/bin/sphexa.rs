@@ -56,13 +56,13 @@ struct RunArgs {
     /// Simulated time to reach (default: the case's).
     #[arg(long = "end-time")]
     end_time: Option<f64>,
-    /// Output folder (default: out/<case>).
+    /// Output folder (default: out/CASE).
     #[arg(long)]
     out: Option<PathBuf>,
     /// Worker threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
-    /// Kernel: sinc[:n] (n >= 1, default 6), m4, wendland-c2, wendland-c4, wendland-c6.
+    /// Kernel: `sinc`, `sinc:N` (N >= 1, default 6), `m4`, `wendland-c2`, `wendland-c4`, `wendland-c6`.
     #[arg(long, default_value = "sinc:6")]
     kernel: String,
     /// Target neighbour count, self included.
@@ -83,6 +83,9 @@ struct RunArgs {
     /// Courant factor.
     #[arg(long, default_value_t = 0.2)]
     courant: f64,
+    /// Leave out the grad-h correction (Omega = 1).
+    #[arg(long)]
+    no_grad_h: bool,
     /// No progress output.
     #[arg(short, long)]
     quiet: bool,
@@ -181,6 +184,7 @@ fn run(a: RunArgs) -> Result<(), AppError> {
             CurveArg::Morton => Curve::Morton,
         },
         alpha: a.alpha,
+        grad_h: !a.no_grad_h,
         ..HydroConfig::default()
     };
     config.neighbors.ng0 = a.ng0;

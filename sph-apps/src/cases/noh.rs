@@ -39,7 +39,7 @@ pub fn setup(side: usize, mut config: HydroConfig) -> Result<Scene, AppError> {
         n,
         FieldSet {
             iad: config.gradients == sph_core::Gradients::Iad,
-            grad_h: true,
+            grad_h: config.grad_h,
         },
     );
     for (i, q) in pts.iter().enumerate() {

@@ -32,7 +32,7 @@ pub fn setup(side: usize, mut config: HydroConfig) -> Result<Scene, AppError> {
         n,
         FieldSet {
             iad: config.gradients == sph_core::Gradients::Iad,
-            grad_h: true,
+            grad_h: config.grad_h,
         },
     );
     let h0 = initial_h(config.neighbors.ng0, 1.0, n);
