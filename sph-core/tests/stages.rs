@@ -329,7 +329,10 @@ fn integrator_is_time_reversible() {
 fn omega_is_near_one_on_lattice_and_varies_when_perturbed() {
     let mut s = lattice(12, 0.6, 100.0, 9);
     compute_density(&mut s);
-    let (mn, mx) = s.p.omega.iter().fold((f64::MAX, f64::MIN), |a, &o| (a.0.min(o), a.1.max(o)));
+    let (mn, mx) =
+        s.p.omega
+            .iter()
+            .fold((f64::MAX, f64::MIN), |a, &o| (a.0.min(o), a.1.max(o)));
     assert!(mn > 0.5 && mx < 1.5, "omega in [{mn}, {mx}]");
     assert!(mx - mn > 1e-3, "omega constant: [{mn}, {mx}]");
 }
