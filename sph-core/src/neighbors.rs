@@ -63,7 +63,12 @@ pub fn find_neighbors(
     nc: &mut [u32],
     step: u64,
 ) -> Result<NeighborStats, CoreError> {
-    let search = NeighborSearch::default();
+    // Symmetric lists: a pair interacts through both W(h_i) and W(h_j), so
+    // both partners must list each other for the forces to stay antisymmetric.
+    let search = NeighborSearch {
+        symmetric: true,
+        ..NeighborSearch::default()
+    };
     let hu = params.h_update(h_update);
     let mut iterations = 0;
     loop {

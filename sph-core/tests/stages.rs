@@ -35,6 +35,7 @@ struct Setup {
     p: Particles,
     bbox: BoundingBox,
     list: NeighborList,
+    keys: Vec<u64>,
 }
 
 fn lattice(n: usize, jitter: f64, ng: f64, seed: u64) -> Setup {
@@ -60,12 +61,37 @@ fn lattice(n: usize, jitter: f64, ng: f64, seed: u64) -> Setup {
     KeySorter::new().sort(&keys, None, &mut perm);
     p.reorder(&perm, &mut Vec::new(), &mut Vec::new());
     apply_permutation(&perm, &mut keys, &mut Vec::new());
-    let tree = Octree::build(&keys, &p.x, &p.y, &p.z, 16).unwrap();
-    let mut list = NeighborList::new();
-    NeighborSearch::default()
-        .find(&tree, &bbox, &p.x, &p.y, &p.z, &p.h, 0..np, &mut list)
+    let mut s = Setup {
+        p,
+        bbox,
+        list: NeighborList::new(),
+        keys: Vec::new(),
+    };
+    rebuild_lists(&mut s, &keys);
+    s.keys = keys;
+    s
+}
+
+/// Symmetric neighbour lists for the current h (as the pipeline builds them).
+fn rebuild_lists(s: &mut Setup, keys: &[u64]) {
+    let p = &s.p;
+    let tree = Octree::build(keys, &p.x, &p.y, &p.z, 16).unwrap();
+    let search = NeighborSearch {
+        symmetric: true,
+        ..Default::default()
+    };
+    search
+        .find(
+            &tree,
+            &s.bbox,
+            &p.x,
+            &p.y,
+            &p.z,
+            &p.h,
+            0..p.len(),
+            &mut s.list,
+        )
         .unwrap();
-    Setup { p, bbox, list }
 }
 
 fn compute_density(s: &mut Setup) {
@@ -221,8 +247,12 @@ proptest! {
             s.p.vy[i] = rng.uniform() - 0.5;
             s.p.vz[i] = rng.uniform() - 0.5;
             s.p.u[i] = 1.0 + rng.uniform();
-            s.p.h[i] *= 1.0 + 0.2 * (rng.uniform() - 0.5);
+            // h varying by +-25%: lists built for these h differ between
+            // partners unless the search is symmetric.
+            s.p.h[i] *= 1.0 + 0.5 * (rng.uniform() - 0.5);
         }
+        let keys = std::mem::take(&mut s.keys);
+        rebuild_lists(&mut s, &keys);
         let gradients = if iad_grad { Gradients::Iad } else { Gradients::Kernel };
         compute_density(&mut s);
         compute_iad(&mut s);

@@ -107,6 +107,10 @@ proptest! {
         let kernel = choice.exact().unwrap();
         let want = kernel.norm() / h.powi(4) * kernel.shape_derivative(v);
         let got = kernel.dw_dr(v * h, h);
-        prop_assert!((got - want).abs() <= 1e-12 * want.abs() + 1e-300, "{}: {} vs {}", choice, got, want);
+        // r = v h then r / h is v only to round-off, which moves w' near the
+        // support edge by more than 1e-12 of its (tiny) value: compare in
+        // units of K/h^4 (max |w'| is of order one).
+        let scale = kernel.norm() / h.powi(4);
+        prop_assert!((got - want).abs() <= 1e-12 * scale, "{}: {} vs {}", choice, got, want);
     }
 }

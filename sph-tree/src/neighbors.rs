@@ -2,7 +2,7 @@
 //! with `|x_i - x_j| < support * h_i` (minimum image on periodic axes),
 //! self included, in ascending index order, stored as CSR.
 
-use crate::octree::Octree;
+use crate::octree::{NodeId, Octree};
 use crate::{BoundingBox, TreeError};
 use rayon::prelude::*;
 use std::ops::Range;
@@ -24,6 +24,10 @@ pub struct NeighborSearch {
     /// Most neighbours stored per particle; beyond it a list is cut and the
     /// particle is reported in [`NeighborStats`] (never silently).
     pub cap: usize,
+    /// List `j` for `i` when `|x_i - x_j| < support * max(h_i, h_j)`, so
+    /// every interacting pair appears in both lists (what pairwise
+    /// antisymmetric forces need). Counts stay one-sided (`< support * h_i`).
+    pub symmetric: bool,
 }
 
 impl Default for NeighborSearch {
@@ -31,6 +35,7 @@ impl Default for NeighborSearch {
         Self {
             support: 2.0,
             cap: u32::MAX as usize,
+            symmetric: false,
         }
     }
 }
@@ -61,6 +66,8 @@ pub struct NeighborList {
     counts: Vec<u32>,
     // Per-chunk buffers, kept between searches so rebuilding allocates nothing.
     chunk_indices: Vec<Vec<u32>>,
+    // Largest h per tree node (symmetric searches).
+    node_hmax: Vec<f64>,
 }
 
 impl NeighborList {
@@ -82,7 +89,8 @@ impl NeighborList {
         &self.indices[self.offsets[k]..self.offsets[k + 1]]
     }
 
-    /// True neighbour count of target `i`, even if its list was cut.
+    /// Neighbour count of target `i` within `support * h_i` (self
+    /// included), even if its list was cut.
     #[inline]
     pub fn count(&self, i: usize) -> usize {
         self.counts[i - self.targets.start] as usize
@@ -131,6 +139,9 @@ impl NeighborSearch {
         if list.chunk_indices.len() < chunks.len() {
             list.chunk_indices.resize_with(chunks.len(), Vec::new);
         }
+        if self.symmetric {
+            node_hmax(tree, h, &mut list.node_hmax);
+        }
         let ctx = Context {
             tree,
             bbox,
@@ -139,8 +150,14 @@ impl NeighborSearch {
             z,
             h,
             support: self.support,
+            node_hmax: if self.symmetric {
+                Some(&list.node_hmax)
+            } else {
+                None
+            },
         };
         let cap = self.cap;
+        let cut: (usize, Option<usize>);
         // Pass 1, parallel over chunks: each chunk writes its own buffer and
         // its slice of the counts and list sizes.
         {
@@ -155,8 +172,9 @@ impl NeighborSearch {
                 sizes_rest = sr;
                 work.push((chunk, buf, c, s));
             }
-            work.into_par_iter()
-                .for_each(|(chunk, buf, counts, sizes)| {
+            cut = work
+                .into_par_iter()
+                .map(|(chunk, buf, counts, sizes)| {
                     buf.clear();
                     let mut sink = ListSink {
                         buf,
@@ -164,9 +182,22 @@ impl NeighborSearch {
                         sizes,
                         cap,
                         base: chunk.particles.start,
+                        over_cap: 0,
+                        first_over_cap: None,
                     };
                     ctx.run_chunk(chunk, &mut sink);
-                });
+                    (sink.over_cap, sink.first_over_cap)
+                })
+                .reduce(
+                    || (0, None),
+                    |a, b| {
+                        let first = match (a.1, b.1) {
+                            (Some(x), Some(y)) => Some(x.min(y)),
+                            (x, y) => x.or(y),
+                        };
+                        (a.0 + b.0, first)
+                    },
+                );
         }
         // Prefix sum of the list sizes, then one parallel copy per chunk.
         for k in 0..nt {
@@ -185,7 +216,9 @@ impl NeighborSearch {
             }
             work.into_par_iter().for_each(|(d, b)| d.copy_from_slice(b));
         }
-        Ok(stats(&list.counts, cap, targets.start))
+        let mut st = stats(&list.counts, usize::MAX, targets.start);
+        (st.over_cap, st.first_over_cap) = cut;
+        Ok(st)
     }
 
     /// Counts neighbours without storing them (for the smoothing-length
@@ -213,6 +246,7 @@ impl NeighborSearch {
             z,
             h,
             support: self.support,
+            node_hmax: None,
         };
         let mut rest: &mut [u32] = counts;
         let mut work = Vec::with_capacity(chunks.len());
@@ -277,8 +311,9 @@ impl NeighborSearch {
 trait Sink {
     /// Whether the sink needs the indices (else only their number).
     const STORE: bool;
-    /// Particle `i` has `count` neighbours; when `STORE` they are
-    /// `neighbors`, complete and ascending (else `neighbors` is empty).
+    /// Particle `i` has `count` neighbours within its own radius and
+    /// `neighbors.len()` listed ones (symmetric searches list more); when
+    /// `STORE` the list is complete and ascending (else it is empty).
     fn particle(&mut self, i: usize, neighbors: &[u32], count: usize);
 }
 
@@ -288,6 +323,8 @@ struct ListSink<'a> {
     sizes: &'a mut [usize],
     cap: usize,
     base: usize,
+    over_cap: usize,
+    first_over_cap: Option<usize>,
 }
 
 impl Sink for ListSink<'_> {
@@ -295,9 +332,15 @@ impl Sink for ListSink<'_> {
     #[inline]
     fn particle(&mut self, i: usize, neighbors: &[u32], n: usize) {
         let k = i - self.base;
-        self.buf.extend_from_slice(&neighbors[..n.min(self.cap)]);
+        let listed = neighbors.len();
+        self.buf
+            .extend_from_slice(&neighbors[..listed.min(self.cap)]);
         self.counts[k] = n.min(u32::MAX as usize) as u32;
-        self.sizes[k] = n.min(self.cap);
+        self.sizes[k] = listed.min(self.cap);
+        if listed > self.cap {
+            self.over_cap += 1;
+            self.first_over_cap.get_or_insert(i);
+        }
     }
 }
 
@@ -323,6 +366,8 @@ struct Candidate {
     hi: [f64; 3],
     shift: [f64; 3],
     exact_shift: bool,
+    /// Largest search radius of the node's particles (symmetric mode).
+    r_node: f64,
 }
 
 /// A run of consecutive leaves searched by one parallel task.
@@ -338,6 +383,7 @@ struct Context<'a> {
     z: &'a [f64],
     h: &'a [f64],
     support: f64,
+    node_hmax: Option<&'a [f64]>,
 }
 
 impl Context<'_> {
@@ -370,17 +416,18 @@ impl Context<'_> {
             bbox.is_periodic(1),
             bbox.is_periodic(2),
         ];
+        let support = self.support;
         // Group box and largest search radius.
         let mut glo = [f64::INFINITY; 3];
         let mut ghi = [f64::NEG_INFINITY; 3];
-        let mut rmax: f64 = 0.0;
+        let mut rgroup: f64 = 0.0;
         for i in group.clone() {
             let p = [x[i], y[i], z[i]];
             for d in 0..3 {
                 glo[d] = glo[d].min(p[d]);
                 ghi[d] = ghi[d].max(p[d]);
             }
-            rmax = rmax.max(self.support * self.h[i]);
+            rgroup = rgroup.max(support * self.h[i]);
         }
         let gc = [
             0.5 * (glo[0] + ghi[0]),
@@ -392,10 +439,18 @@ impl Context<'_> {
             0.5 * (ghi[1] - glo[1]),
             0.5 * (ghi[2] - glo[2]),
         ];
-        let rmax2 = rmax * rmax;
-        // Gap between the group box and a node box along each axis, nearest
-        // periodic image; also returns the shift putting the node there.
-        let gaps = |lo: [f64; 3], hi: [f64; 3]| -> (f64, [f64; 3], bool) {
+        // Search radius against a node: the group's, or in symmetric mode
+        // the larger of it and the node's own particles' radii.
+        let node_r = |node: NodeId| -> f64 {
+            match self.node_hmax {
+                Some(hm) => rgroup.max(support * hm[node as usize]),
+                None => rgroup,
+            }
+        };
+        // Squared gap between the group box and a node box (nearest
+        // periodic image), the shift putting the node there, and whether
+        // that single shift is right for every pair within `r`.
+        let gaps = |lo: [f64; 3], hi: [f64; 3], r: f64| -> (f64, [f64; 3], bool) {
             let mut d2 = 0.0;
             let mut shift = [0.0; 3];
             let mut exact = true;
@@ -407,9 +462,7 @@ impl Context<'_> {
                     let s = -lengths[d] * (dc / lengths[d]).round();
                     dc += s;
                     shift[d] = s;
-                    // A single image is right for all pairs within rmax
-                    // when rmax + extents <= L/2.
-                    exact &= rmax + 2.0 * (gh[d] + nh) <= 0.5 * lengths[d];
+                    exact &= r + 2.0 * (gh[d] + nh) <= 0.5 * lengths[d];
                 }
                 let gap = dc.abs() - gh[d] - nh;
                 if gap > 0.0 {
@@ -423,8 +476,9 @@ impl Context<'_> {
         tree.traverse(
             |node| {
                 let (lo, hi) = tree.node_box(node);
-                let (d2, shift, exact_shift) = gaps(lo, hi);
-                if d2 >= rmax2 {
+                let r = node_r(node);
+                let (d2, shift, exact_shift) = gaps(lo, hi, r);
+                if d2 >= r * r {
                     return false;
                 }
                 let particles = tree.particles(node);
@@ -437,6 +491,7 @@ impl Context<'_> {
                     hi: [hi[0] + shift[0], hi[1] + shift[1], hi[2] + shift[2]],
                     shift,
                     exact_shift,
+                    r_node: self.node_hmax.map_or(0.0, |hm| support * hm[node as usize]),
                 });
                 false
             },
@@ -448,11 +503,13 @@ impl Context<'_> {
         if S::STORE && scratch.len() < most {
             scratch.resize(most, 0);
         }
+        let symmetric = self.node_hmax.is_some();
         for i in group {
             let p = [x[i], y[i], z[i]];
-            let r = self.support * self.h[i];
+            let r = support * self.h[i];
             let r2 = r * r;
             let mut len = 0usize;
+            let mut own = 0usize;
             for c in cands.iter() {
                 // Point-to-box distance against the (shifted) leaf box.
                 let mut d2 = 0.0;
@@ -462,28 +519,37 @@ impl Context<'_> {
                         d2 += g * g;
                     }
                 }
-                if c.exact_shift {
-                    if d2 >= r2 {
-                        continue;
-                    }
-                    let q = [p[0] - c.shift[0], p[1] - c.shift[1], p[2] - c.shift[2]];
-                    for j in c.particles.clone() {
-                        let (dx, dy, dz) = (q[0] - x[j], q[1] - y[j], q[2] - z[j]);
-                        if S::STORE {
-                            scratch[len] = j as u32;
-                        }
-                        len += usize::from(dx * dx + dy * dy + dz * dz < r2);
-                    }
+                let reach = r.max(c.r_node);
+                if c.exact_shift && d2 >= reach * reach {
+                    continue;
+                }
+                let q = if c.exact_shift {
+                    [p[0] - c.shift[0], p[1] - c.shift[1], p[2] - c.shift[2]]
                 } else {
-                    for j in c.particles.clone() {
-                        if S::STORE {
-                            scratch[len] = j as u32;
-                        }
-                        len += usize::from(bbox.distance2(p, [x[j], y[j], z[j]]) < r2);
+                    p
+                };
+                for j in c.particles.clone() {
+                    let dd = if c.exact_shift {
+                        let (dx, dy, dz) = (q[0] - x[j], q[1] - y[j], q[2] - z[j]);
+                        dx * dx + dy * dy + dz * dz
+                    } else {
+                        bbox.distance2(p, [x[j], y[j], z[j]])
+                    };
+                    let inside = dd < r2;
+                    let listed = if symmetric {
+                        let rj = support * self.h[j];
+                        inside || dd < rj * rj
+                    } else {
+                        inside
+                    };
+                    if S::STORE {
+                        scratch[len] = j as u32;
                     }
+                    len += usize::from(listed);
+                    own += usize::from(inside);
                 }
             }
-            sink.particle(i, &scratch[..if S::STORE { len } else { 0 }], len);
+            sink.particle(i, &scratch[..if S::STORE { len } else { 0 }], own);
         }
     }
 }
@@ -571,4 +637,23 @@ fn stats(counts: &[u32], cap: usize, start: usize) -> NeighborStats {
         s.min_count = 0;
     }
     s
+}
+
+/// Largest h over each node's particles, bottom-up.
+fn node_hmax(tree: &Octree, h: &[f64], out: &mut Vec<f64>) {
+    out.clear();
+    out.resize(tree.num_nodes(), 0.0);
+    for l in (0..tree.num_levels()).rev() {
+        for node in tree.level_nodes(l) {
+            let m = if tree.is_leaf(node) {
+                h[tree.particles(node)]
+                    .iter()
+                    .fold(0.0, |a: f64, &b| a.max(b))
+            } else {
+                tree.children(node)
+                    .fold(0.0, |a: f64, c| a.max(out[c as usize]))
+            };
+            out[node as usize] = m;
+        }
+    }
 }

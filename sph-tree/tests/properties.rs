@@ -259,6 +259,33 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(16))]
+
+    /// Symmetric lists: j listed for i iff |x_i - x_j| < 2 max(h_i, h_j),
+    /// so every pair appears in both lists; counts stay one-sided.
+    #[test]
+    fn symmetric_lists_match_brute_force(seed in any::<u64>(), n in 50usize..1200, periodic in any::<bool>()) {
+        let s = make_set(n, seed, Layout::Uniform, periodic, 6.0);
+        let tree = Octree::build(&s.keys, &s.x, &s.y, &s.z, 8).unwrap();
+        let mut list = NeighborList::new();
+        let search = NeighborSearch { symmetric: true, ..Default::default() };
+        search.find(&tree, &s.bbox, &s.x, &s.y, &s.z, &s.h, 0..n, &mut list).unwrap();
+        for i in 0..n {
+            let p = [s.x[i], s.y[i], s.z[i]];
+            let expect: Vec<u32> = (0..n)
+                .filter(|&j| {
+                    let r = 2.0 * s.h[i].max(s.h[j]);
+                    s.bbox.distance2(p, [s.x[j], s.y[j], s.z[j]]) < r * r
+                })
+                .map(|j| j as u32)
+                .collect();
+            prop_assert_eq!(list.neighbors(i), &expect[..], "particle {}", i);
+            prop_assert_eq!(list.count(i), brute_force(&s, i, 2.0 * s.h[i]).len());
+        }
+    }
+}
+
 #[test]
 fn cap_is_reported_not_silent() {
     let s = make_set(2000, 7, Layout::Uniform, true, 1.0);
