@@ -83,6 +83,12 @@ impl Eos {
         }
     }
 
+    /// Whether pressure depends on the internal energy (else `u` is only
+    /// carried along, and may go negative without harm).
+    pub fn uses_internal_energy(&self) -> bool {
+        matches!(self, Eos::IdealGas { .. })
+    }
+
     /// Whether the EOS needs a per-particle reference state.
     pub fn needs_reference(&self) -> bool {
         matches!(self, Eos::TaitReferenced { .. })

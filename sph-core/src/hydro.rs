@@ -340,7 +340,8 @@ impl<K: Kernel> Hydro<K> {
             .min(self.dt_cap);
         self.dt_cap = f64::INFINITY;
         let h_update = self.config.neighbors.h_update(self.config.h_update);
-        let report = integrate(p, bbox, dt, self.dt_prev, Some(h_update), step)?;
+        let guard = self.config.eos.uses_internal_energy();
+        let report = integrate(p, bbox, dt, self.dt_prev, Some(h_update), guard, step)?;
         lap(8, &mut times);
 
         let t = self.t;

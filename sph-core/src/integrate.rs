@@ -62,13 +62,16 @@ pub struct IntegrateReport {
 
 /// Advances every particle by `dt` (the previous step was `dt_prev`), wraps
 /// positions into periodic boxes and updates h (when `h_update` is given)
-/// from the neighbour counts `p.nc`.
+/// from the neighbour counts `p.nc`. With `energy_guard`, a negative
+/// internal energy falls back to first order and then is an error (set it
+/// when pressure depends on u).
 pub fn integrate(
     p: &mut Particles,
     bbox: &BoundingBox,
     dt: f64,
     dt_prev: f64,
     h_update: Option<HUpdate>,
+    energy_guard: bool,
     step: u64,
 ) -> Result<IntegrateReport, CoreError> {
     let (ax, ay, az, du, nc, id) = (&p.ax, &p.ay, &p.az, &p.du, &p.nc, &p.id);
@@ -122,7 +125,7 @@ pub fn integrate(
             let d = du[i];
             let mut fallback = 0;
             let mut un = *u + d * dt + 0.5 * (d - *du_prev) / dt_prev * dt * dt;
-            if un.is_nan() || un < 0.0 {
+            if energy_guard && (un.is_nan() || un < 0.0) {
                 fallback = 1;
                 un = *u + d * dt;
                 if un.is_nan() || un < 0.0 {

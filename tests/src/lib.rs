@@ -1,0 +1,19 @@
+//! Shared helpers of the end-to-end validation tests: run a case the way
+//! `sphexa run` does and return its summary.
+
+use sph_apps::cases::Scene;
+use sph_apps::simulation::{Progress, Stop};
+use sph_apps::{Simulation, Summary};
+use sph_kernels::{KernelChoice, Tabulated};
+
+/// Runs `scene` with the default kernel until `stop`, writing outputs into
+/// a fresh folder under the target directory, and returns the summary.
+pub fn run(scene: Scene, stop: Stop, name: &str) -> Summary {
+    let kernel: Tabulated = KernelChoice::default()
+        .tabulate(Tabulated::DEFAULT_POINTS)
+        .expect("default kernel");
+    let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let mut sim = Simulation::new(scene, kernel, KernelChoice::default().to_string())
+        .expect("simulation set-up");
+    sim.run(stop, &out, Progress::Quiet).expect("run completes")
+}
