@@ -7,13 +7,12 @@ use sph_apps::{Simulation, Summary};
 use sph_kernels::{KernelChoice, Tabulated};
 
 /// Runs `scene` with the default kernel until `stop`, writing outputs into
-/// a fresh folder under the target directory, and returns the summary.
-pub fn run(scene: Scene, stop: Stop, name: &str) -> Summary {
+/// `out`, and returns the summary.
+pub fn run(scene: Scene, stop: Stop, out: &std::path::Path) -> Summary {
     let kernel: Tabulated = KernelChoice::default()
         .tabulate(Tabulated::DEFAULT_POINTS)
         .expect("default kernel");
-    let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
     let mut sim = Simulation::new(scene, kernel, KernelChoice::default().to_string())
         .expect("simulation set-up");
-    sim.run(stop, &out, Progress::Quiet).expect("run completes")
+    sim.run(stop, out, Progress::Quiet).expect("run completes")
 }

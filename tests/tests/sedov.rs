@@ -8,7 +8,8 @@ use sph_core::HydroConfig;
 #[test]
 fn sedov_30_cubed_matches_similarity_solution() {
     let scene = sedov::setup(30, HydroConfig::default()).unwrap();
-    let s = sph_validation::run(scene, Stop::Time(0.05), "sedov30");
+    let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("sedov30");
+    let s = sph_validation::run(scene, Stop::Time(0.05), &out);
     let r = s.shock_radius.unwrap();
     let r_ref = s.shock_radius_ref.unwrap();
     // Reference value of VALIDATION.md, computed independently.
