@@ -131,13 +131,12 @@ pub fn mean_density_in_shell(p: &Particles, r0: f64, r1: f64) -> f64 {
 /// neighbours (self excluded), from the last neighbour lists.
 pub fn min_pair_distance(
     p: &Particles,
-    list: &sph_tree::NeighborList,
+    list: &sph_tree::CompactNeighborList,
     bbox: &sph_tree::BoundingBox,
 ) -> f64 {
     let mut best = f64::INFINITY;
     for i in list.targets() {
-        for &j in list.neighbors(i) {
-            let j = j as usize;
+        for j in list.neighbors(i) {
             if j != i {
                 let d = bbox.distance2([p.x[i], p.y[i], p.z[i]], [p.x[j], p.y[j], p.z[j]]);
                 best = best.min(d);

@@ -8,12 +8,12 @@ use sph_core::momentum::{momentum_energy, Gradients, HydroState, Rates};
 use sph_core::{Eos, FieldSet, Particles};
 use sph_kernels::{Sinc, Tabulated};
 use sph_tree::{
-    apply_permutation, compute_keys, Boundary, BoundingBox, Curve, KeySorter, NeighborList,
+    apply_permutation, compute_keys, Boundary, BoundingBox, CompactNeighborList, Curve, KeySorter,
     NeighborSearch, Octree,
 };
 use std::hint::black_box;
 
-fn setup() -> (Particles, BoundingBox, NeighborList) {
+fn setup() -> (Particles, BoundingBox, CompactNeighborList) {
     let side = 46; // 97,336 particles
     let n = side * side * side;
     let mut p = Particles::new(n, FieldSet::default());
@@ -44,9 +44,9 @@ fn setup() -> (Particles, BoundingBox, NeighborList) {
     p.reorder(&perm, &mut Vec::new(), &mut Vec::new());
     apply_permutation(&perm, &mut keys, &mut Vec::new());
     let tree = Octree::build(&keys, &p.x, &p.y, &p.z, 16).unwrap();
-    let mut list = NeighborList::new();
+    let mut list = CompactNeighborList::new();
     NeighborSearch::default()
-        .find(&tree, &bbox, &p.x, &p.y, &p.z, &p.h, 0..n, &mut list)
+        .find_compact(&tree, &bbox, &p.x, &p.y, &p.z, &p.h, 0..n, &mut list)
         .unwrap();
     (p, bbox, list)
 }

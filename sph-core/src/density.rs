@@ -3,7 +3,7 @@
 use crate::geometry::Separation;
 use rayon::prelude::*;
 use sph_kernels::Kernel;
-use sph_tree::{BoundingBox, NeighborList};
+use sph_tree::{BoundingBox, CompactNeighborList};
 
 /// Positions, smoothing lengths and masses: what a kernel sum reads.
 #[derive(Debug, Clone, Copy)]
@@ -29,7 +29,7 @@ pub fn density<K: Kernel>(
     kernel: &K,
     bbox: &BoundingBox,
     pos: Positions<'_>,
-    nl: &NeighborList,
+    nl: &CompactNeighborList,
     rho: &mut [f64],
     omega: &mut [f64],
 ) {
@@ -43,13 +43,14 @@ pub fn density<K: Kernel>(
         let inv_h = 1.0 / hi;
         let mut sum_w = 0.0;
         let mut sum_dh = 0.0;
-        for &j in nl.neighbors(i) {
-            let j = j as usize;
-            let d = sep.between(pi, [pos.x[j], pos.y[j], pos.z[j]]);
-            let v = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() * inv_h;
-            let (w, dw) = kernel.shape_and_derivative(v);
-            sum_w += pos.m[j] * w;
-            sum_dh += pos.m[j] * (3.0 * w + v * dw);
+        for run in nl.runs(i) {
+            for j in run {
+                let d = sep.between(pi, [pos.x[j], pos.y[j], pos.z[j]]);
+                let v = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() * inv_h;
+                let (w, dw) = kernel.shape_and_derivative(v);
+                sum_w += pos.m[j] * w;
+                sum_dh += pos.m[j] * (3.0 * w + v * dw);
+            }
         }
         let h3 = inv_h * inv_h * inv_h;
         let r = norm * h3 * sum_w;

@@ -12,7 +12,8 @@ use crate::timestep::TimestepParams;
 use crate::{CoreError, Particles};
 use sph_kernels::Kernel;
 use sph_tree::{
-    compute_keys, Boundary, BoundingBox, Curve, KeySorter, NeighborList, NeighborStats, Octree,
+    compute_keys, Boundary, BoundingBox, CompactNeighborList, Curve, KeySorter, NeighborStats,
+    Octree,
 };
 use std::time::Instant;
 
@@ -105,7 +106,7 @@ pub struct Hydro<K: Kernel> {
     kernel: K,
     config: HydroConfig,
     tree: Octree,
-    list: NeighborList,
+    list: CompactNeighborList,
     keys: Vec<u64>,
     perm: Vec<u32>,
     sorter: KeySorter,
@@ -135,7 +136,7 @@ impl<K: Kernel> Hydro<K> {
             kernel,
             config,
             tree: Octree::default(),
-            list: NeighborList::new(),
+            list: CompactNeighborList::new(),
             keys: Vec::new(),
             perm: Vec::new(),
             sorter: KeySorter::new(),
@@ -185,7 +186,7 @@ impl<K: Kernel> Hydro<K> {
     }
 
     /// The neighbour lists of the last step.
-    pub fn neighbor_list(&self) -> &NeighborList {
+    pub fn neighbor_list(&self) -> &CompactNeighborList {
         &self.list
     }
 

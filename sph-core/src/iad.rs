@@ -7,7 +7,7 @@ use crate::density::Positions;
 use crate::geometry::Separation;
 use rayon::prelude::*;
 use sph_kernels::Kernel;
-use sph_tree::{BoundingBox, NeighborList};
+use sph_tree::{BoundingBox, CompactNeighborList};
 
 /// A singular matrix found by [`iad`]: local index, determinant of the
 /// normalised matrix.
@@ -54,7 +54,7 @@ pub fn iad<K: Kernel>(
     bbox: &BoundingBox,
     pos: Positions<'_>,
     rho: &[f64],
-    nl: &NeighborList,
+    nl: &CompactNeighborList,
     c: &mut [Vec<f64>; 6],
 ) -> Result<(), Singular> {
     let sep = Separation::new(bbox);
@@ -77,17 +77,18 @@ pub fn iad<K: Kernel>(
             let pi = [pos.x[i], pos.y[i], pos.z[i]];
             let inv_h = 1.0 / pos.h[i];
             let mut t = [0.0; 6];
-            for &j in nl.neighbors(i) {
-                let j = j as usize;
-                let d = sep.between(pi, [pos.x[j], pos.y[j], pos.z[j]]);
-                let v = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() * inv_h;
-                let w = pos.m[j] / rho[j] * kernel.shape(v);
-                t[0] += w * d[0] * d[0];
-                t[1] += w * d[0] * d[1];
-                t[2] += w * d[0] * d[2];
-                t[3] += w * d[1] * d[1];
-                t[4] += w * d[1] * d[2];
-                t[5] += w * d[2] * d[2];
+            for run in nl.runs(i) {
+                for j in run {
+                    let d = sep.between(pi, [pos.x[j], pos.y[j], pos.z[j]]);
+                    let v = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() * inv_h;
+                    let w = pos.m[j] / rho[j] * kernel.shape(v);
+                    t[0] += w * d[0] * d[0];
+                    t[1] += w * d[0] * d[1];
+                    t[2] += w * d[0] * d[2];
+                    t[3] += w * d[1] * d[1];
+                    t[4] += w * d[1] * d[2];
+                    t[5] += w * d[2] * d[2];
+                }
             }
             let k3 = norm * inv_h * inv_h * inv_h;
             let t = t.map(|v| v * k3);

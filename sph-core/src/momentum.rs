@@ -22,7 +22,7 @@ use crate::density::Positions;
 use crate::geometry::Separation;
 use rayon::prelude::*;
 use sph_kernels::Kernel;
-use sph_tree::{BoundingBox, NeighborList};
+use sph_tree::{BoundingBox, CompactNeighborList};
 
 /// How gradients are computed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -86,7 +86,7 @@ pub fn momentum_energy<K: Kernel>(
     s: HydroState<'_>,
     gradients: Gradients,
     alpha: f64,
-    nl: &NeighborList,
+    nl: &CompactNeighborList,
     out: Rates<'_>,
 ) -> MomentumStats {
     let sep = Separation::new(bbox);
@@ -129,8 +129,7 @@ pub fn momentum_energy<K: Kernel>(
             let mut e_av = 0.0;
             let mut div_v = 0.0;
             let mut vsig_max = ci;
-            for &j in nl.neighbors(i) {
-                let j = j as usize;
+            for j in nl.neighbors(i) {
                 if j == i {
                     continue;
                 }

@@ -4,7 +4,7 @@
 
 use crate::integrate::HUpdate;
 use crate::CoreError;
-use sph_tree::{BoundingBox, NeighborList, NeighborSearch, NeighborStats, Octree};
+use sph_tree::{BoundingBox, CompactNeighborList, NeighborSearch, NeighborStats, Octree};
 use std::ops::Range;
 
 /// Neighbour-count targets.
@@ -59,7 +59,7 @@ pub fn find_neighbors(
     h: &mut [f64],
     ids: &[u64],
     targets: Range<usize>,
-    list: &mut NeighborList,
+    list: &mut CompactNeighborList,
     nc: &mut [u32],
     step: u64,
 ) -> Result<NeighborStats, CoreError> {
@@ -72,7 +72,7 @@ pub fn find_neighbors(
     let hu = params.h_update(h_update);
     let mut iterations = 0;
     loop {
-        let stats = search.find(tree, bbox, x, y, z, h, targets.clone(), list)?;
+        let stats = search.find_compact(tree, bbox, x, y, z, h, targets.clone(), list)?;
         let mut bad = None;
         for i in targets.clone() {
             let c = list.count(i);

@@ -9,7 +9,7 @@ use sph_core::momentum::{momentum_energy, Gradients, HydroState, Rates};
 use sph_core::{Eos, FieldSet, Particles};
 use sph_kernels::{Sinc, Tabulated};
 use sph_tree::{
-    apply_permutation, compute_keys, Boundary, BoundingBox, Curve, KeySorter, NeighborList,
+    apply_permutation, compute_keys, Boundary, BoundingBox, CompactNeighborList, Curve, KeySorter,
     NeighborSearch, Octree,
 };
 
@@ -34,7 +34,7 @@ fn kernel() -> Tabulated {
 struct Setup {
     p: Particles,
     bbox: BoundingBox,
-    list: NeighborList,
+    list: CompactNeighborList,
     keys: Vec<u64>,
 }
 
@@ -64,7 +64,7 @@ fn lattice(n: usize, jitter: f64, ng: f64, seed: u64) -> Setup {
     let mut s = Setup {
         p,
         bbox,
-        list: NeighborList::new(),
+        list: CompactNeighborList::new(),
         keys: Vec::new(),
     };
     rebuild_lists(&mut s, &keys);
@@ -81,7 +81,7 @@ fn rebuild_lists(s: &mut Setup, keys: &[u64]) {
         ..Default::default()
     };
     search
-        .find(
+        .find_compact(
             &tree,
             &s.bbox,
             &p.x,
@@ -156,8 +156,7 @@ fn iad_gradient(s: &Setup, f: &dyn Fn([f64; 3]) -> f64, i: usize) -> [f64; 3] {
     let pi = [p.x[i], p.y[i], p.z[i]];
     let c = std::array::from_fn::<f64, 6, _>(|q| p.iad[q][i]);
     let mut g = [0.0; 3];
-    for &j in s.list.neighbors(i) {
-        let j = j as usize;
+    for j in s.list.neighbors(i) {
         // x_j - x_i through the periodic boundary; f is evaluated at the
         // unwrapped image so a linear field stays linear.
         let d = s
@@ -217,8 +216,7 @@ fn plain_kernel_gradients_are_not_exact_on_perturbed_lattice() {
         // sum_j V_j (f_j - f_i) grad_i W for f = x (exact answer (1,0,0)).
         let pi = [p.x[i], p.y[i], p.z[i]];
         let mut gx = 0.0;
-        for &j in s.list.neighbors(i) {
-            let j = j as usize;
+        for j in s.list.neighbors(i) {
             let d = s
                 .bbox
                 .min_image([pi[0] - p.x[j], pi[1] - p.y[j], pi[2] - p.z[j]]);

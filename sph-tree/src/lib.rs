@@ -45,12 +45,14 @@
 //! ```
 
 mod bbox;
+pub mod compact;
 mod error;
 pub mod neighbors;
 pub mod octree;
 pub mod sfc;
 
 pub use bbox::{Boundary, BoundingBox};
+pub use compact::CompactNeighborList;
 pub use error::TreeError;
 pub use neighbors::{for_each_neighbor, NeighborList, NeighborSearch, NeighborStats};
 pub use octree::{NodeId, Octree};

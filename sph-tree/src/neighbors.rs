@@ -2,6 +2,7 @@
 //! with `|x_i - x_j| < support * h_i` (minimum image on periodic axes),
 //! self included, in ascending index order, stored as CSR.
 
+use crate::compact::CompactNeighborList;
 use crate::octree::{NodeId, Octree};
 use crate::{BoundingBox, TreeError};
 use rayon::prelude::*;
@@ -221,6 +222,78 @@ impl NeighborSearch {
         Ok(st)
     }
 
+    /// Like [`find`](Self::find), but stores the lists run-length encoded
+    /// ([`CompactNeighborList`]): a fraction of the memory of CSR. The cap
+    /// does not apply (lists are never cut).
+    pub fn find_compact(
+        &self,
+        tree: &Octree,
+        bbox: &BoundingBox,
+        x: &[f64],
+        y: &[f64],
+        z: &[f64],
+        h: &[f64],
+        targets: Range<usize>,
+        list: &mut CompactNeighborList,
+    ) -> Result<NeighborStats, TreeError> {
+        self.validate(tree, bbox, x, y, z, h, &targets)?;
+        let chunks = target_chunks(tree, &targets);
+        let nt = targets.len();
+        list.targets = targets.clone();
+        list.counts.clear();
+        list.counts.resize(nt, 0);
+        list.start.clear();
+        list.start.resize(nt, 0);
+        list.chunk_first.clear();
+        list.chunk_first
+            .extend(chunks.iter().map(|c| c.particles.start));
+        if list.chunks.len() < chunks.len() {
+            list.chunks.resize_with(chunks.len(), Vec::new);
+        }
+        list.n_chunks = chunks.len();
+        if self.symmetric {
+            node_hmax(tree, h, &mut list.node_hmax_scratch);
+        }
+        let ctx = Context {
+            tree,
+            bbox,
+            x,
+            y,
+            z,
+            h,
+            support: self.support,
+            node_hmax: if self.symmetric {
+                Some(&list.node_hmax_scratch)
+            } else {
+                None
+            },
+        };
+        let mut counts_rest: &mut [u32] = &mut list.counts;
+        let mut start_rest: &mut [u32] = &mut list.start;
+        let mut work = Vec::with_capacity(chunks.len());
+        for (chunk, buf) in chunks.iter().zip(list.chunks.iter_mut()) {
+            let len = chunk.particles.len();
+            let (c, cr) = std::mem::take(&mut counts_rest).split_at_mut(len);
+            let (s, sr) = std::mem::take(&mut start_rest).split_at_mut(len);
+            counts_rest = cr;
+            start_rest = sr;
+            work.push((chunk, buf, c, s));
+        }
+        work.into_par_iter()
+            .for_each(|(chunk, buf, counts, start)| {
+                buf.clear();
+                let mut sink = CompactSink {
+                    buf,
+                    counts,
+                    start,
+                    base: chunk.particles.start,
+                };
+                ctx.run_chunk(chunk, &mut sink);
+                sink.buf.shrink_to(sink.buf.len() + sink.buf.len() / 8);
+            });
+        Ok(stats(&list.counts, usize::MAX, targets.start))
+    }
+
     /// Counts neighbours without storing them (for the smoothing-length
     /// iteration): `counts[k]` for target `targets.start + k`.
     pub fn count(
@@ -341,6 +414,24 @@ impl Sink for ListSink<'_> {
             self.over_cap += 1;
             self.first_over_cap.get_or_insert(i);
         }
+    }
+}
+
+struct CompactSink<'a> {
+    buf: &'a mut Vec<u8>,
+    counts: &'a mut [u32],
+    start: &'a mut [u32],
+    base: usize,
+}
+
+impl Sink for CompactSink<'_> {
+    const STORE: bool = true;
+    #[inline]
+    fn particle(&mut self, i: usize, neighbors: &[u32], n: usize) {
+        let k = i - self.base;
+        self.start[k] = self.buf.len() as u32;
+        self.counts[k] = n.min(u32::MAX as usize) as u32;
+        crate::compact::encode(self.buf, i, neighbors);
     }
 }
 

@@ -286,6 +286,30 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(16))]
+
+    /// The run-length-encoded lists hold exactly the CSR lists.
+    #[test]
+    fn compact_lists_equal_csr(seed in any::<u64>(), n in 1usize..1500, periodic in any::<bool>(), symmetric in any::<bool>(), lo in 0usize..200) {
+        let s = make_set(n, seed, Layout::Uniform, periodic, 4.0);
+        let tree = Octree::build(&s.keys, &s.x, &s.y, &s.z, 8).unwrap();
+        let search = NeighborSearch { symmetric, ..Default::default() };
+        let targets = lo.min(n)..n;
+        let mut csr = NeighborList::new();
+        let a = search.find(&tree, &s.bbox, &s.x, &s.y, &s.z, &s.h, targets.clone(), &mut csr).unwrap();
+        let mut compact = sph_tree::CompactNeighborList::new();
+        let b = search.find_compact(&tree, &s.bbox, &s.x, &s.y, &s.z, &s.h, targets.clone(), &mut compact).unwrap();
+        prop_assert_eq!(a, b);
+        for i in targets {
+            let got: Vec<u32> = compact.neighbors(i).map(|j| j as u32).collect();
+            prop_assert_eq!(&got[..], csr.neighbors(i), "particle {}", i);
+            prop_assert_eq!(compact.count(i), csr.count(i));
+            prop_assert_eq!(compact.listed(i), csr.neighbors(i).len());
+        }
+    }
+}
+
 #[test]
 fn cap_is_reported_not_silent() {
     let s = make_set(2000, 7, Layout::Uniform, true, 1.0);
