@@ -198,6 +198,8 @@ impl Simulation {
         };
         let bins = analysis::radial_profile(p, reference.as_ref(), t_end, r_max, 100);
         write_profile(&out.join("profile.csv"), &bins)?;
+        let title = format!("{}, {n} particles, t = {t_end:.4}", self.scene.case);
+        crate::plot::profile_png(&out.join("profile.png"), &title, &bins)?;
         let (shock_radius, shock_radius_ref, plateau, plateau_ref) = match &reference {
             Some(Reference::Sedov(s)) => (
                 Some(analysis::peak_radius(&bins)),
