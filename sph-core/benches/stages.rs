@@ -4,7 +4,7 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use sph_core::density::{density, Positions};
 use sph_core::iad::iad;
-use sph_core::momentum::{momentum_energy, Gradients, HydroState, Rates};
+use sph_core::momentum::{momentum_energy, Gradients, HydroState, PairFactors, Rates};
 use sph_core::{Eos, FieldSet, Particles};
 use sph_kernels::{Sinc, Tabulated};
 use sph_tree::{
@@ -124,11 +124,13 @@ fn benches(c: &mut Criterion) {
             omega,
             iad: std::array::from_fn(|k| c6[k].as_slice()),
         };
+        let mut factors = PairFactors::default();
+        factors.fill(&state);
         g.bench_function(name, |b| {
             b.iter(|| {
                 let rates = Rates { ax, ay, az, du };
                 black_box(momentum_energy(
-                    &kernel, &bbox, state, grad, 1.0, &list, rates,
+                    &kernel, &bbox, state, &factors, grad, 1.0, &list, rates,
                 ))
             })
         });

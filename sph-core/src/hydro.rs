@@ -6,7 +6,7 @@ use crate::density::{density, Positions};
 use crate::eos::Eos;
 use crate::iad::iad;
 use crate::integrate::{integrate, HUpdate};
-use crate::momentum::{momentum_energy, Gradients, HydroState, MomentumStats, Rates};
+use crate::momentum::{momentum_energy, Gradients, HydroState, MomentumStats, PairFactors, Rates};
 use crate::neighbors::{find_neighbors, NeighborParams};
 use crate::timestep::TimestepParams;
 use crate::{CoreError, Particles};
@@ -107,6 +107,7 @@ pub struct Hydro<K: Kernel> {
     config: HydroConfig,
     tree: Octree,
     list: CompactNeighborList,
+    factors: PairFactors,
     keys: Vec<u64>,
     perm: Vec<u32>,
     sorter: KeySorter,
@@ -137,6 +138,7 @@ impl<K: Kernel> Hydro<K> {
             config,
             tree: Octree::default(),
             list: CompactNeighborList::new(),
+            factors: PairFactors::default(),
             keys: Vec::new(),
             perm: Vec::new(),
             sorter: KeySorter::new(),
@@ -194,6 +196,7 @@ impl<K: Kernel> Hydro<K> {
     /// permutation, scratch), for memory reports.
     pub fn buffer_bytes(&self) -> usize {
         self.list.bytes()
+            + self.factors.bytes()
             + self.keys.capacity() * 8
             + self.perm.capacity() * 4
             + self.scratch.capacity() * 8
@@ -310,6 +313,7 @@ impl<K: Kernel> Hydro<K> {
             omega: &p.omega,
             iad: iad_ref,
         };
+        self.factors.fill(&state);
         let rates = Rates {
             ax: &mut p.ax,
             ay: &mut p.ay,
@@ -320,6 +324,7 @@ impl<K: Kernel> Hydro<K> {
             &self.kernel,
             bbox,
             state,
+            &self.factors,
             self.config.gradients,
             self.config.alpha,
             &self.list,

@@ -79,12 +79,67 @@ pub struct MomentumStats {
     pub max_abs_div_v: f64,
 }
 
-/// Computes accelerations and du/dt of every target of `nl`.
+/// Per-particle factors of the pair terms, computed once per step so the
+/// pair loop needs a single division (`1/r`): `1/h`, `1/rho` and
+/// `P / (Omega rho^2)`. The buffers are reused between steps.
+#[derive(Debug, Clone, Default)]
+pub struct PairFactors {
+    inv_h: Vec<f64>,
+    inv_rho: Vec<f64>,
+    pre: Vec<f64>,
+}
+
+impl PairFactors {
+    /// Fills the factors of every particle of `s` (parallel).
+    pub fn fill(&mut self, s: &HydroState<'_>) {
+        let n = s.rho.len();
+        for v in [&mut self.inv_h, &mut self.inv_rho, &mut self.pre] {
+            v.resize(n, 0.0);
+        }
+        (
+            self.inv_h.par_iter_mut(),
+            self.inv_rho.par_iter_mut(),
+            self.pre.par_iter_mut(),
+        )
+            .into_par_iter()
+            .enumerate()
+            .for_each(|(i, (ih, ir, pre))| {
+                let om = if s.omega.is_empty() { 1.0 } else { s.omega[i] };
+                *ih = 1.0 / s.pos.h[i];
+                *ir = 1.0 / s.rho[i];
+                *pre = s.p[i] * *ir * *ir / om;
+            });
+    }
+
+    /// Bytes held.
+    pub fn bytes(&self) -> usize {
+        (self.inv_h.capacity() + self.inv_rho.capacity() + self.pre.capacity()) * 8
+    }
+}
+
+/// Computes accelerations and du/dt of every target of `nl`; `f` must have
+/// been filled from the same state.
 pub fn momentum_energy<K: Kernel>(
     kernel: &K,
     bbox: &BoundingBox,
     s: HydroState<'_>,
+    f: &PairFactors,
     gradients: Gradients,
+    alpha: f64,
+    nl: &CompactNeighborList,
+    out: Rates<'_>,
+) -> MomentumStats {
+    match gradients {
+        Gradients::Iad => pair_loop::<K, true>(kernel, bbox, s, f, alpha, nl, out),
+        Gradients::Kernel => pair_loop::<K, false>(kernel, bbox, s, f, alpha, nl, out),
+    }
+}
+
+fn pair_loop<K: Kernel, const IAD: bool>(
+    kernel: &K,
+    bbox: &BoundingBox,
+    s: HydroState<'_>,
+    f: &PairFactors,
     alpha: f64,
     nl: &CompactNeighborList,
     out: Rates<'_>,
@@ -93,7 +148,6 @@ pub fn momentum_energy<K: Kernel>(
     let targets = nl.targets();
     let norm = kernel.norm();
     let pos = s.pos;
-    let omega = |i: usize| if s.omega.is_empty() { 1.0 } else { s.omega[i] };
     let r = targets.clone();
     (
         out.ax[r.clone()].par_iter_mut(),
@@ -107,12 +161,11 @@ pub fn momentum_energy<K: Kernel>(
             let i = targets.start + k;
             let pi = [pos.x[i], pos.y[i], pos.z[i]];
             let vi = [s.vx[i], s.vy[i], s.vz[i]];
-            let hi = pos.h[i];
-            let inv_hi = 1.0 / hi;
+            let inv_hi = f.inv_h[i];
             let ki3 = norm * inv_hi * inv_hi * inv_hi;
-            let (rho_i, ci) = (s.rho[i], s.c[i]);
-            let pre_i = s.p[i] / (omega(i) * rho_i * rho_i);
-            let ci_m = if gradients == Gradients::Iad {
+            let ci = s.c[i];
+            let (pre_i, inv_rho_i) = (f.pre[i], f.inv_rho[i]);
+            let ci_m = if IAD {
                 [
                     s.iad[0][i],
                     s.iad[1][i],
@@ -129,17 +182,17 @@ pub fn momentum_energy<K: Kernel>(
             let mut e_av = 0.0;
             let mut div_v = 0.0;
             let mut vsig_max = ci;
-            for j in nl.neighbors(i) {
-                if j == i {
-                    continue;
-                }
-                let d = sep.between(pi, [pos.x[j], pos.y[j], pos.z[j]]); // x_i - x_j
-                let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-                let rr = r2.sqrt();
-                let hj = pos.h[j];
-                let inv_hj = 1.0 / hj;
-                let (ai, aj) = match gradients {
-                    Gradients::Iad => {
+            for run in nl.runs(i) {
+                for j in run {
+                    if j == i {
+                        continue;
+                    }
+                    let d = sep.between(pi, [pos.x[j], pos.y[j], pos.z[j]]); // x_i - x_j
+                    let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                    let inv_r = 1.0 / r2.sqrt();
+                    let rr = r2 * inv_r;
+                    let inv_hj = f.inv_h[j];
+                    let (ai, aj) = if IAD {
                         // A = C (x_j - x_i) W = -(C d) W
                         let wi = ki3 * kernel.shape(rr * inv_hi);
                         let kj3 = norm * inv_hj * inv_hj * inv_hj;
@@ -158,46 +211,45 @@ pub fn momentum_energy<K: Kernel>(
                             [-cd[0] * wi, -cd[1] * wi, -cd[2] * wi],
                             [-cdj[0] * wj, -cdj[1] * wj, -cdj[2] * wj],
                         )
-                    }
-                    Gradients::Kernel => {
+                    } else {
                         // grad_i W(r, h) = K/h^4 w'(r/h) d / r
-                        let gi = ki3 * inv_hi * kernel.shape_derivative(rr * inv_hi) / rr;
-                        let gj = norm * inv_hj.powi(4) * kernel.shape_derivative(rr * inv_hj) / rr;
+                        let gi = ki3 * inv_hi * kernel.shape_derivative(rr * inv_hi) * inv_r;
+                        let kj4 = norm * inv_hj * inv_hj * inv_hj * inv_hj;
+                        let gj = kj4 * kernel.shape_derivative(rr * inv_hj) * inv_r;
                         (
                             [gi * d[0], gi * d[1], gi * d[2]],
                             [gj * d[0], gj * d[1], gj * d[2]],
                         )
+                    };
+                    let vij = [vi[0] - s.vx[j], vi[1] - s.vy[j], vi[2] - s.vz[j]];
+                    let w = (vij[0] * d[0] + vij[1] * d[1] + vij[2] * d[2]) * inv_r;
+                    let vsig = ci + s.c[j] - 3.0 * w.min(0.0);
+                    vsig_max = vsig_max.max(vsig);
+                    let visc = if w < 0.0 {
+                        -0.5 * alpha * vsig * w
+                    } else {
+                        0.0
+                    };
+                    let mj = pos.m[j];
+                    let inv_rho_j = f.inv_rho[j];
+                    let (vi_r, vj_r) = (0.5 * visc * inv_rho_i, 0.5 * visc * inv_rho_j);
+                    let (ci_f, cj_f) = (pre_i + vi_r, f.pre[j] + vj_r);
+                    for k in 0..3 {
+                        a[k] -= mj * (ci_f * ai[k] + cj_f * aj[k]);
                     }
-                };
-                let vij = [vi[0] - s.vx[j], vi[1] - s.vy[j], vi[2] - s.vz[j]];
-                let w = (vij[0] * d[0] + vij[1] * d[1] + vij[2] * d[2]) / rr;
-                let cj_s = s.c[j];
-                let vsig = ci + cj_s - 3.0 * w.min(0.0);
-                vsig_max = vsig_max.max(vsig);
-                let visc = if w < 0.0 {
-                    -0.5 * alpha * vsig * w
-                } else {
-                    0.0
-                };
-                let mj = pos.m[j];
-                let rho_j = s.rho[j];
-                let pre_j = s.p[j] / (omega(j) * rho_j * rho_j);
-                let (vi_r, vj_r) = (0.5 * visc / rho_i, 0.5 * visc / rho_j);
-                for k in 0..3 {
-                    a[k] -= mj * ((pre_i + vi_r) * ai[k] + (pre_j + vj_r) * aj[k]);
+                    let vai = vij[0] * ai[0] + vij[1] * ai[1] + vij[2] * ai[2];
+                    let vaj = vij[0] * aj[0] + vij[1] * aj[1] + vij[2] * aj[2];
+                    e_p += mj * vai;
+                    e_av += mj * (vi_r * vai + vj_r * vaj);
+                    div_v -= mj * inv_rho_j * vai;
                 }
-                let vai = vij[0] * ai[0] + vij[1] * ai[1] + vij[2] * ai[2];
-                let vaj = vij[0] * aj[0] + vij[1] * aj[1] + vij[2] * aj[2];
-                e_p += mj * vai;
-                e_av += mj * (vi_r * vai + vj_r * vaj);
-                div_v -= mj / rho_j * vai;
             }
             *ax = a[0];
             *ay = a[1];
             *az = a[2];
             *du = pre_i * e_p + 0.5 * e_av;
             MomentumStats {
-                min_h_over_vsig: hi / vsig_max,
+                min_h_over_vsig: 1.0 / (inv_hi * vsig_max),
                 max_abs_div_v: div_v.abs(),
             }
         })

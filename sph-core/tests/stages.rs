@@ -5,7 +5,7 @@ use proptest::prelude::*;
 use sph_core::density::{density, Positions};
 use sph_core::iad::iad;
 use sph_core::integrate::integrate;
-use sph_core::momentum::{momentum_energy, Gradients, HydroState, Rates};
+use sph_core::momentum::{momentum_energy, Gradients, HydroState, PairFactors, Rates};
 use sph_core::{Eos, FieldSet, Particles};
 use sph_kernels::{Sinc, Tabulated};
 use sph_tree::{
@@ -145,7 +145,18 @@ fn compute_forces(s: &mut Setup, gradients: Gradients) {
         az: &mut p.az,
         du: &mut p.du,
     };
-    momentum_energy(&kernel(), &s.bbox, state, gradients, 1.0, &s.list, rates);
+    let mut factors = PairFactors::default();
+    factors.fill(&state);
+    momentum_energy(
+        &kernel(),
+        &s.bbox,
+        state,
+        &factors,
+        gradients,
+        1.0,
+        &s.list,
+        rates,
+    );
 }
 
 /// IAD gradient of f at particle i: sum_j V_j (f_j - f_i) C_i (x_j - x_i) W_ij.
