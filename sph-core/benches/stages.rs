@@ -41,7 +41,7 @@ fn setup() -> (Particles, BoundingBox, CompactNeighborList) {
     compute_keys(&bbox, Curve::Hilbert, &p.x, &p.y, &p.z, &mut keys);
     let mut perm = Vec::new();
     KeySorter::new().sort(&keys, None, &mut perm);
-    p.reorder(&perm, &mut Vec::new(), &mut Vec::new());
+    p.reorder(&perm, &mut Vec::new());
     apply_permutation(&perm, &mut keys, &mut Vec::new());
     let tree = Octree::build(&keys, &p.x, &p.y, &p.z, 16).unwrap();
     let mut list = CompactNeighborList::new();

@@ -111,8 +111,7 @@ pub struct Hydro<K: Kernel> {
     keys: Vec<u64>,
     perm: Vec<u32>,
     sorter: KeySorter,
-    scratch: Vec<f64>,
-    scratch_u64: Vec<u64>,
+    scratch: Vec<u64>,
     step: u64,
     t: f64,
     dt_prev: f64,
@@ -143,7 +142,6 @@ impl<K: Kernel> Hydro<K> {
             perm: Vec::new(),
             sorter: KeySorter::new(),
             scratch: Vec::new(),
-            scratch_u64: Vec::new(),
             step: 0,
             t: t0,
             dt_prev: dt0,
@@ -200,7 +198,6 @@ impl<K: Kernel> Hydro<K> {
             + self.keys.capacity() * 8
             + self.perm.capacity() * 4
             + self.scratch.capacity() * 8
-            + self.scratch_u64.capacity() * 8
             + self.tree.num_nodes() * 90
     }
 
@@ -225,8 +222,8 @@ impl<K: Kernel> Hydro<K> {
         refit_open_axes(bbox, p)?;
         compute_keys(bbox, self.config.curve, &p.x, &p.y, &p.z, &mut self.keys);
         self.sorter.sort(&self.keys, Some(&p.id), &mut self.perm);
-        p.reorder(&self.perm, &mut self.scratch, &mut self.scratch_u64);
-        sph_tree::apply_permutation(&self.perm, &mut self.keys, &mut self.scratch_u64);
+        p.reorder(&self.perm, &mut self.scratch);
+        sph_tree::apply_permutation(&self.perm, &mut self.keys, &mut self.scratch);
         lap(0, &mut times);
 
         self.tree
@@ -378,8 +375,8 @@ impl<K: Kernel> Hydro<K> {
         refit_open_axes(bbox, p)?;
         compute_keys(bbox, self.config.curve, &p.x, &p.y, &p.z, &mut self.keys);
         self.sorter.sort(&self.keys, Some(&p.id), &mut self.perm);
-        p.reorder(&self.perm, &mut self.scratch, &mut self.scratch_u64);
-        sph_tree::apply_permutation(&self.perm, &mut self.keys, &mut self.scratch_u64);
+        p.reorder(&self.perm, &mut self.scratch);
+        sph_tree::apply_permutation(&self.perm, &mut self.keys, &mut self.scratch);
         self.tree
             .rebuild(&self.keys, &p.x, &p.y, &p.z, self.config.bucket)?;
         find_neighbors(

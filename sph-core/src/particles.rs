@@ -5,7 +5,7 @@
 //! empty when grad-h terms are off. Arrays are kept in space-filling-curve
 //! order by [`Particles::reorder`].
 
-use sph_tree::apply_permutation;
+use sph_tree::{apply_permutation, apply_permutation_f64};
 
 /// Which optional fields a run needs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -187,14 +187,14 @@ impl Particles {
     }
 
     /// Reorders every field by `perm` (`field[i] <- field[perm[i]]`),
-    /// using the two scratch buffers (kept by the caller between steps, so
-    /// nothing is allocated once they have grown).
-    pub fn reorder(&mut self, perm: &[u32], scratch: &mut Vec<f64>, scratch_u64: &mut Vec<u64>) {
+    /// using one scratch buffer (kept by the caller between steps, so
+    /// nothing is allocated once it has grown).
+    pub fn reorder(&mut self, perm: &[u32], scratch: &mut Vec<u64>) {
         assert_eq!(perm.len(), self.len(), "permutation length");
         for f in self.f64_fields_mut() {
-            apply_permutation(perm, f, scratch);
+            apply_permutation_f64(perm, f, scratch);
         }
-        apply_permutation(perm, &mut self.id, scratch_u64);
+        apply_permutation(perm, &mut self.id, scratch);
         // nc is recomputed by the next search.
         self.nc.resize(perm.len(), 0);
     }

@@ -59,7 +59,7 @@ fn lattice(n: usize, jitter: f64, ng: f64, seed: u64) -> Setup {
     compute_keys(&bbox, Curve::Hilbert, &p.x, &p.y, &p.z, &mut keys);
     let mut perm = Vec::new();
     KeySorter::new().sort(&keys, None, &mut perm);
-    p.reorder(&perm, &mut Vec::new(), &mut Vec::new());
+    p.reorder(&perm, &mut Vec::new());
     apply_permutation(&perm, &mut keys, &mut Vec::new());
     let mut s = Setup {
         p,

@@ -3,8 +3,8 @@
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
 use sph_tree::{
-    apply_permutation, compute_keys, Boundary, BoundingBox, Curve, KeySorter, NeighborList,
-    NeighborSearch, Octree,
+    apply_permutation, compute_keys, Boundary, BoundingBox, CompactNeighborList, Curve, KeySorter,
+    NeighborList, NeighborSearch, Octree,
 };
 use std::hint::black_box;
 
@@ -96,13 +96,27 @@ fn benches(c: &mut Criterion) {
                 BatchSize::PerIteration,
             )
         });
+        let mut compact = CompactNeighborList::new();
+        let symmetric = NeighborSearch {
+            symmetric: true,
+            ..Default::default()
+        };
+        g.bench_function("neighbors_100_compact_symmetric", |b| {
+            b.iter(|| {
+                let st = symmetric
+                    .find_compact(&tree, &s.bbox, &s.x, &s.y, &s.z, &s.h, 0..n, &mut compact)
+                    .unwrap();
+                black_box(st.total)
+            })
+        });
         let st = search
             .find(&tree, &s.bbox, &s.x, &s.y, &s.z, &s.h, 0..n, &mut list)
             .unwrap();
         eprintln!(
-            "{label}: mean neighbours {:.1}, neighbour-list bytes per particle {:.1}, tree nodes {}",
+            "{label}: mean neighbours {:.1}, bytes per particle: CSR lists {:.1}, compact lists {:.1}; tree nodes {}",
             st.total as f64 / n as f64,
             list.bytes() as f64 / n as f64,
+            compact.bytes() as f64 / n as f64,
             tree.num_nodes()
         );
         g.finish();

@@ -56,7 +56,10 @@ pub use compact::CompactNeighborList;
 pub use error::TreeError;
 pub use neighbors::{for_each_neighbor, NeighborList, NeighborSearch, NeighborStats};
 pub use octree::{NodeId, Octree};
-pub use sfc::{apply_permutation, compute_keys, Curve, KeySorter, CELLS_PER_AXIS, MAX_LEVEL};
+pub use sfc::{
+    apply_permutation, apply_permutation_f64, compute_keys, Curve, KeySorter, CELLS_PER_AXIS,
+    MAX_LEVEL,
+};
 
 /// Checks that the coordinate slices (and optionally one more array) have
 /// equal lengths.

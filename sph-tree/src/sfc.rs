@@ -178,17 +178,18 @@ pub fn compute_keys(
     });
 }
 
-/// Reusable sorter: the permutation that orders particles by key, ties
-/// broken by an optional id (then by index), so the order is unique.
+/// Sorter of particles by key, ties broken by an optional id (then by
+/// index), so the order is unique. It sorts the permutation itself with a
+/// comparator that looks the keys up, so it holds no buffer of its own
+/// (4 bytes per particle in all), and input already sorted from the last
+/// step (the common case) is cheap for the pattern-defeating quicksort.
 #[derive(Debug, Default, Clone)]
-pub struct KeySorter {
-    pairs: Vec<(u64, u64, u32)>,
-}
+pub struct KeySorter;
 
 impl KeySorter {
-    /// A sorter with no buffers yet.
+    /// A sorter.
     pub fn new() -> Self {
-        Self::default()
+        Self
     }
 
     /// Fills `perm` so that `keys[perm[0]] <= keys[perm[1]] <= ...`, with
@@ -196,19 +197,35 @@ impl KeySorter {
     pub fn sort(&mut self, keys: &[u64], ids: Option<&[u64]>, perm: &mut Vec<u32>) {
         let n = keys.len();
         assert!(n <= u32::MAX as usize, "more than 2^32-1 particles");
-        if let Some(ids) = ids {
-            assert_eq!(ids.len(), n, "ids and keys differ in length");
-        }
-        self.pairs.clear();
-        self.pairs.extend(
-            keys.iter()
-                .enumerate()
-                .map(|(i, &k)| (k, ids.map_or(0, |d| d[i]), i as u32)),
-        );
-        self.pairs.par_sort_unstable();
         perm.clear();
-        perm.extend(self.pairs.iter().map(|p| p.2));
+        perm.extend(0..n as u32);
+        match ids {
+            Some(ids) => {
+                assert_eq!(ids.len(), n, "ids and keys differ in length");
+                perm.par_sort_unstable_by_key(|&a| (keys[a as usize], ids[a as usize], a));
+            }
+            None => perm.par_sort_unstable_by_key(|&a| (keys[a as usize], a)),
+        }
     }
+}
+
+/// Reorders an `f64` array by `perm` through a `u64` gather buffer (the
+/// bits are copied back), so one scratch buffer serves every field type.
+pub fn apply_permutation_f64(perm: &[u32], data: &mut [f64], scratch: &mut Vec<u64>) {
+    assert_eq!(
+        perm.len(),
+        data.len(),
+        "permutation and data differ in length"
+    );
+    scratch.clear();
+    scratch.resize(perm.len(), 0);
+    scratch
+        .par_iter_mut()
+        .zip(perm.par_iter())
+        .for_each(|(s, &p)| *s = data[p as usize].to_bits());
+    data.par_iter_mut()
+        .zip(scratch.par_iter())
+        .for_each(|(d, &s)| *d = f64::from_bits(s));
 }
 
 /// Reorders `data` by `perm` (`data[i] <- data[perm[i]]`), using `scratch`
