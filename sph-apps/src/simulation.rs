@@ -191,6 +191,13 @@ impl Simulation {
         for (k, name) in STAGES.iter().enumerate() {
             stage_seconds.insert(name.to_string(), stage_sum[k] / timed_steps.max(1) as f64);
         }
+        // Last row: the mean over steps 2..N (step 1 holds set-up costs).
+        let means: Vec<String> = stage_sum
+            .iter()
+            .map(|s| format!("{:.6e}", s / timed_steps.max(1) as f64))
+            .collect();
+        timings_csv.line(&format!("mean_2..N,{},{mean_step_s:.6e}", means.join(",")))?;
+        timings_csv.flush()?;
         let reference = self.scene.reference.clone();
         let r_max = match reference {
             Some(Reference::Noh(_)) => 0.5,
