@@ -629,7 +629,7 @@ impl Context<'_> {
                     let inside = dd < r2;
                     let listed = if symmetric {
                         let rj = support * self.h[j];
-                        inside || dd < rj * rj
+                        inside | (dd < rj * rj)
                     } else {
                         inside
                     };
