@@ -238,17 +238,14 @@ impl Simulation {
             .sum::<f64>()
             .sqrt();
         let l0n = (l0[0] * l0[0] + l0[1] * l0[1] + l0[2] * l0[2]).sqrt();
-        let l_scale: f64 = if l0n > 0.0 {
-            l0n
-        } else {
-            (0..n)
-                .map(|i| {
-                    p.m[i]
-                        * p.x[i].hypot(p.y[i]).hypot(p.z[i])
-                        * p.vx[i].hypot(p.vy[i]).hypot(p.vz[i])
-                })
-                .sum()
-        };
+        // A scale for round-off: sum m |x||v| (at the end), unless the
+        // initial angular momentum is itself significant.
+        let l_abs: f64 = (0..n)
+            .map(|i| {
+                p.m[i] * p.x[i].hypot(p.y[i]).hypot(p.z[i]) * p.vx[i].hypot(p.vy[i]).hypot(p.vz[i])
+            })
+            .sum();
+        let l_scale = if l0n > 1e-6 * l_abs { l0n } else { l_abs };
         let summary = Summary {
             case: self.scene.case.to_string(),
             particles: n,
