@@ -218,34 +218,17 @@ impl<K: Kernel> Hydro<K> {
             clock = now;
         };
 
-        // Sort along the curve.
-        refit_open_axes(bbox, p)?;
-        compute_keys(bbox, self.config.curve, &p.x, &p.y, &p.z, &mut self.keys);
-        self.sorter.sort(&self.keys, Some(&p.id), &mut self.perm);
-        p.reorder(&self.perm, &mut self.scratch);
-        sph_tree::apply_permutation(&self.perm, &mut self.keys, &mut self.scratch);
+        self.sort(p, bbox)?;
         lap(0, &mut times);
-
         self.tree
             .rebuild(&self.keys, &p.x, &p.y, &p.z, self.config.bucket)?;
         lap(1, &mut times);
-
-        let stats = find_neighbors(
-            &self.config.neighbors,
-            self.config.h_update,
-            &self.tree,
-            bbox,
-            &p.x,
-            &p.y,
-            &p.z,
-            &mut p.h,
-            &p.id,
-            0..n,
-            &mut self.list,
-            &mut p.nc,
-            step,
-        )?;
+        let stats = self.search(p, bbox, step)?;
         lap(2, &mut times);
+        self.density(p, bbox);
+        lap(3, &mut times);
+        self.eos(p)?;
+        lap(4, &mut times);
 
         let pos = Positions {
             x: &p.x,
@@ -254,38 +237,6 @@ impl<K: Kernel> Hydro<K> {
             h: &p.h,
             m: &p.m,
         };
-        density(
-            &self.kernel,
-            bbox,
-            pos,
-            &self.list,
-            &mut p.rho,
-            &mut p.omega,
-        );
-        lap(3, &mut times);
-
-        let reference = if self.config.eos.needs_reference() {
-            if p.eos_ref[0].len() != n || p.eos_ref[1].len() != n {
-                return Err(CoreError::Invalid(format!(
-                    "equation of state {:?} needs per-particle reference density and pressure (eos_ref) for all {n} particles",
-                    self.config.eos
-                )));
-            }
-            // Calibrate reference densities left at zero to the first evaluation.
-            for i in 0..n {
-                if p.eos_ref[0][i] == 0.0 {
-                    p.eos_ref[0][i] = p.rho[i];
-                }
-            }
-            Some((p.eos_ref[0].as_slice(), p.eos_ref[1].as_slice()))
-        } else {
-            None
-        };
-        self.config
-            .eos
-            .apply(&p.rho, &p.u, reference, &mut p.p, &mut p.c);
-        lap(4, &mut times);
-
         if self.config.gradients == Gradients::Iad {
             if let Err(s) = iad(&self.kernel, bbox, pos, &p.rho, &self.list, &mut p.iad) {
                 return Err(CoreError::SingularIad {
@@ -371,14 +322,32 @@ impl<K: Kernel> Hydro<K> {
         p: &mut Particles,
         bbox: &mut BoundingBox,
     ) -> Result<(), CoreError> {
-        let n = p.len();
+        self.sort(p, bbox)?;
+        self.tree
+            .rebuild(&self.keys, &p.x, &p.y, &p.z, self.config.bucket)?;
+        self.search(p, bbox, self.step)?;
+        self.density(p, bbox);
+        self.eos(p)
+    }
+
+    /// Refits open axes, computes keys and puts the particles in curve order.
+    fn sort(&mut self, p: &mut Particles, bbox: &mut BoundingBox) -> Result<(), CoreError> {
         refit_open_axes(bbox, p)?;
         compute_keys(bbox, self.config.curve, &p.x, &p.y, &p.z, &mut self.keys);
         self.sorter.sort(&self.keys, Some(&p.id), &mut self.perm);
         p.reorder(&self.perm, &mut self.scratch);
         sph_tree::apply_permutation(&self.perm, &mut self.keys, &mut self.scratch);
-        self.tree
-            .rebuild(&self.keys, &p.x, &p.y, &p.z, self.config.bucket)?;
+        Ok(())
+    }
+
+    /// Neighbour lists of every particle, with the h iteration.
+    fn search(
+        &mut self,
+        p: &mut Particles,
+        bbox: &BoundingBox,
+        step: u64,
+    ) -> Result<NeighborStats, CoreError> {
+        let n = p.len();
         find_neighbors(
             &self.config.neighbors,
             self.config.h_update,
@@ -392,8 +361,12 @@ impl<K: Kernel> Hydro<K> {
             0..n,
             &mut self.list,
             &mut p.nc,
-            self.step,
-        )?;
+            step,
+        )
+    }
+
+    /// Density and grad-h factor.
+    fn density(&self, p: &mut Particles, bbox: &BoundingBox) {
         let pos = Positions {
             x: &p.x,
             y: &p.y,
@@ -409,7 +382,24 @@ impl<K: Kernel> Hydro<K> {
             &mut p.rho,
             &mut p.omega,
         );
-        let reference = if self.config.eos.needs_reference() && p.eos_ref[0].len() == n {
+    }
+
+    /// Pressure and sound speed; an EOS with a per-particle reference state
+    /// calibrates reference densities left at zero to the current density.
+    fn eos(&self, p: &mut Particles) -> Result<(), CoreError> {
+        let n = p.len();
+        let reference = if self.config.eos.needs_reference() {
+            if p.eos_ref[0].len() != n || p.eos_ref[1].len() != n {
+                return Err(CoreError::Invalid(format!(
+                    "equation of state {:?} needs per-particle reference density and pressure (eos_ref) for all {n} particles",
+                    self.config.eos
+                )));
+            }
+            for i in 0..n {
+                if p.eos_ref[0][i] == 0.0 {
+                    p.eos_ref[0][i] = p.rho[i];
+                }
+            }
             Some((p.eos_ref[0].as_slice(), p.eos_ref[1].as_slice()))
         } else {
             None
