@@ -143,36 +143,21 @@ impl NeighborSearch {
         if self.symmetric {
             node_hmax(tree, h, &mut list.node_hmax);
         }
-        let ctx = Context {
-            tree,
-            bbox,
-            x,
-            y,
-            z,
-            h,
-            support: self.support,
-            node_hmax: if self.symmetric {
-                Some(&list.node_hmax)
-            } else {
-                None
-            },
-        };
+        let ctx = self.context(tree, bbox, [x, y, z, h], Some(&list.node_hmax));
         let cap = self.cap;
         let cut: (usize, Option<usize>);
         // Pass 1, parallel over chunks: each chunk writes its own buffer and
         // its slice of the counts and list sizes.
         {
-            let mut counts_rest: &mut [u32] = &mut list.counts;
-            let mut sizes_rest: &mut [usize] = &mut list.offsets[1..];
-            let mut work = Vec::with_capacity(chunks.len());
-            for (chunk, buf) in chunks.iter().zip(list.chunk_indices.iter_mut()) {
-                let len = chunk.particles.len();
-                let (c, cr) = std::mem::take(&mut counts_rest).split_at_mut(len);
-                let (s, sr) = std::mem::take(&mut sizes_rest).split_at_mut(len);
-                counts_rest = cr;
-                sizes_rest = sr;
-                work.push((chunk, buf, c, s));
-            }
+            let lens = || chunks.iter().map(|c| c.particles.len());
+            let counts = split_by(&mut list.counts, lens());
+            let sizes = split_by(&mut list.offsets[1..], lens());
+            let work: Vec<_> = chunks
+                .iter()
+                .zip(list.chunk_indices.iter_mut())
+                .zip(counts.into_iter().zip(sizes))
+                .map(|((chunk, buf), (c, s))| (chunk, buf, c, s))
+                .collect();
             cut = work
                 .into_par_iter()
                 .map(|(chunk, buf, counts, sizes)| {
@@ -208,14 +193,12 @@ impl NeighborSearch {
         list.indices.clear();
         list.indices.resize(total, 0);
         {
-            let mut rest: &mut [u32] = &mut list.indices;
-            let mut work = Vec::with_capacity(chunks.len());
-            for buf in list.chunk_indices.iter().take(chunks.len()) {
-                let (d, r) = std::mem::take(&mut rest).split_at_mut(buf.len());
-                rest = r;
-                work.push((d, buf));
-            }
-            work.into_par_iter().for_each(|(d, b)| d.copy_from_slice(b));
+            let bufs = &list.chunk_indices[..chunks.len()];
+            let dests = split_by(&mut list.indices, bufs.iter().map(|b| b.len()));
+            dests
+                .into_par_iter()
+                .zip(bufs.par_iter())
+                .for_each(|(d, b)| d.copy_from_slice(b));
         }
         let mut st = stats(&list.counts, usize::MAX, targets.start);
         (st.over_cap, st.first_over_cap) = cut;
@@ -254,31 +237,16 @@ impl NeighborSearch {
         if self.symmetric {
             node_hmax(tree, h, &mut list.node_hmax_scratch);
         }
-        let ctx = Context {
-            tree,
-            bbox,
-            x,
-            y,
-            z,
-            h,
-            support: self.support,
-            node_hmax: if self.symmetric {
-                Some(&list.node_hmax_scratch)
-            } else {
-                None
-            },
-        };
-        let mut counts_rest: &mut [u32] = &mut list.counts;
-        let mut start_rest: &mut [u32] = &mut list.start;
-        let mut work = Vec::with_capacity(chunks.len());
-        for (chunk, buf) in chunks.iter().zip(list.chunks.iter_mut()) {
-            let len = chunk.particles.len();
-            let (c, cr) = std::mem::take(&mut counts_rest).split_at_mut(len);
-            let (s, sr) = std::mem::take(&mut start_rest).split_at_mut(len);
-            counts_rest = cr;
-            start_rest = sr;
-            work.push((chunk, buf, c, s));
-        }
+        let ctx = self.context(tree, bbox, [x, y, z, h], Some(&list.node_hmax_scratch));
+        let lens = || chunks.iter().map(|c| c.particles.len());
+        let counts = split_by(&mut list.counts, lens());
+        let starts = split_by(&mut list.start, lens());
+        let work: Vec<_> = chunks
+            .iter()
+            .zip(list.chunks.iter_mut())
+            .zip(counts.into_iter().zip(starts))
+            .map(|((chunk, buf), (c, s))| (chunk, buf, c, s))
+            .collect();
         work.into_par_iter()
             .for_each(|(chunk, buf, counts, start)| {
                 buf.clear();
@@ -311,23 +279,9 @@ impl NeighborSearch {
         counts.clear();
         counts.resize(targets.len(), 0);
         let chunks = target_chunks(tree, &targets);
-        let ctx = Context {
-            tree,
-            bbox,
-            x,
-            y,
-            z,
-            h,
-            support: self.support,
-            node_hmax: None,
-        };
-        let mut rest: &mut [u32] = counts;
-        let mut work = Vec::with_capacity(chunks.len());
-        for chunk in &chunks {
-            let (c, r) = std::mem::take(&mut rest).split_at_mut(chunk.particles.len());
-            rest = r;
-            work.push((chunk, c));
-        }
+        let ctx = self.context(tree, bbox, [x, y, z, h], None);
+        let parts = split_by(counts, chunks.iter().map(|c| c.particles.len()));
+        let work: Vec<_> = chunks.iter().zip(parts).collect();
         work.into_par_iter().for_each(|(chunk, counts)| {
             let mut sink = CountSink {
                 counts,
@@ -336,6 +290,27 @@ impl NeighborSearch {
             ctx.run_chunk(chunk, &mut sink);
         });
         Ok(stats(counts, self.cap, targets.start))
+    }
+
+    /// What a chunk search reads; `hmax` is the per-node largest h,
+    /// used only by symmetric searches.
+    fn context<'a>(
+        &self,
+        tree: &'a Octree,
+        bbox: &'a BoundingBox,
+        [x, y, z, h]: [&'a [f64]; 4],
+        hmax: Option<&'a [f64]>,
+    ) -> Context<'a> {
+        Context {
+            tree,
+            bbox,
+            x,
+            y,
+            z,
+            h,
+            support: self.support,
+            node_hmax: if self.symmetric { hmax } else { None },
+        }
     }
 
     fn validate(
@@ -747,4 +722,16 @@ fn node_hmax(tree: &Octree, h: &[f64], out: &mut Vec<f64>) {
             out[node as usize] = m;
         }
     }
+}
+
+/// Cuts `data` into consecutive pieces of the given lengths (one per
+/// parallel chunk).
+fn split_by<T>(mut data: &mut [T], lens: impl Iterator<Item = usize>) -> Vec<&mut [T]> {
+    let mut out = Vec::new();
+    for len in lens {
+        let (a, rest) = std::mem::take(&mut data).split_at_mut(len);
+        out.push(a);
+        data = rest;
+    }
+    out
 }
