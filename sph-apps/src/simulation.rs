@@ -199,10 +199,10 @@ impl Simulation {
         timings_csv.line(&format!("mean_2..N,{},{mean_step_s:.6e}", means.join(",")))?;
         timings_csv.flush()?;
         let reference = self.scene.reference.clone();
-        let r_max = match reference {
-            Some(Reference::Noh(_)) => 0.5,
-            _ => 0.5,
-        };
+        // Radial bins out to the half-width of the (final) box, which every
+        // case centres on the origin.
+        let [lx, ly, lz] = self.scene.bbox.lengths();
+        let r_max = 0.5 * lx.max(ly).max(lz);
         let bins = analysis::radial_profile(p, reference.as_ref(), t_end, r_max, 100);
         write_profile(&out.join("profile.csv"), &bins)?;
         let title = format!("{}, {n} particles, t = {t_end:.4}", self.scene.case);
