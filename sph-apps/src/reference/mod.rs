@@ -28,6 +28,16 @@ pub struct FlowState {
     pub u: f64,
 }
 
+impl FlowState {
+    /// The state reported for NaN input.
+    pub const NAN: FlowState = FlowState {
+        rho: f64::NAN,
+        p: f64::NAN,
+        v: f64::NAN,
+        u: f64::NAN,
+    };
+}
+
 /// Why a reference solution could not be built.
 #[derive(thiserror::Error, Debug, Clone, PartialEq)]
 pub enum ReferenceError {

@@ -257,12 +257,7 @@ impl Sedov {
     /// (it is infinite at `r = 0`). A NaN input gives an all-NaN state.
     pub fn state(&self, r: f64, t: f64) -> FlowState {
         if r.is_nan() || t.is_nan() {
-            return FlowState {
-                rho: f64::NAN,
-                p: f64::NAN,
-                v: f64::NAN,
-                u: f64::NAN,
-            };
+            return FlowState::NAN;
         }
         let r = r.abs();
         let radius = self.shock_radius(t);
