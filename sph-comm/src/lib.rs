@@ -1,0 +1,1 @@
+//! Communicator abstraction (work in progress).

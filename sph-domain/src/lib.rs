@@ -1,0 +1,1 @@
+//! Distributed domain decomposition (work in progress).

@@ -1,0 +1,1 @@
+//! Self-gravity on the octree (work in progress).
