@@ -1,0 +1,529 @@
+//! The distributed domain: one `sync` per step puts every rank's particles
+//! in global SFC order (migration to the owners of balanced key ranges) and
+//! appends the halos its owned particles interact with; `exchange` then
+//! refreshes any halo fields point to point.
+
+use crate::global_tree::{Assignment, GlobalTree};
+use crate::halo::candidate_cells;
+use crate::{DomainError, ParticleFields};
+use rayon::prelude::*;
+use sph_comm::{Communicator, ReduceOp};
+use sph_tree::{compute_keys, Boundary, BoundingBox, Curve, KeySorter};
+use std::ops::Range;
+use std::time::Instant;
+
+/// Parameters of the decomposition.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DomainConfig {
+    /// Space-filling curve of the keys.
+    pub curve: Curve,
+    /// Most particles per global-tree leaf (cornerstone's `globalBucketSize`);
+    /// leaves are the unit of load balance and of halo discovery.
+    pub bucket: u64,
+    /// Headroom of the interaction radius over the largest smoothing length
+    /// at sync time: halos cover `2 * margin * h_max`, so smoothing lengths
+    /// may grow by this factor during the step's h iteration.
+    pub h_margin: f64,
+}
+
+impl Default for DomainConfig {
+    fn default() -> Self {
+        Self {
+            curve: Curve::Hilbert,
+            bucket: 256,
+            h_margin: 1.2,
+        }
+    }
+}
+
+/// Figures of the last [`Domain::sync`] and the exchanges since.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SyncStats {
+    /// Particles owned by this rank.
+    pub owned: usize,
+    /// Halo particles held by this rank.
+    pub halos: usize,
+    /// Particles that arrived by migration.
+    pub migrated_in: usize,
+    /// Bytes this rank sent (migration, halos and field exchanges).
+    pub bytes_sent: u64,
+    /// Seconds spent inside communication calls.
+    pub comm_seconds: f64,
+    /// Seconds of the whole sync, communication included.
+    pub sync_seconds: f64,
+}
+
+/// Halo exchange plan for one peer.
+#[derive(Debug, Clone, Default)]
+struct Peer {
+    rank: usize,
+    /// Local indices of owned particles this rank sends to the peer.
+    send: Vec<u32>,
+    /// Local indices of the halos the peer sends to this rank, in its order.
+    recv: Vec<u32>,
+}
+
+/// A rank's view of the distributed particle set.
+#[derive(Debug)]
+pub struct Domain<C: Communicator> {
+    comm: C,
+    config: DomainConfig,
+    tree: GlobalTree,
+    counts: Vec<u64>,
+    assignment: Assignment,
+    keys: Vec<u64>,
+    perm: Vec<u32>,
+    scratch: Vec<u64>,
+    scratch_keys: Vec<u64>,
+    owned: Option<Range<usize>>,
+    peers: Vec<Peer>,
+    h_limit: f64,
+    stats: SyncStats,
+}
+
+impl<C: Communicator> Domain<C> {
+    /// A domain over `comm`. The first [`sync`](Self::sync) takes every
+    /// particle a rank holds as its own.
+    pub fn new(comm: C, config: DomainConfig) -> Result<Self, DomainError> {
+        if config.bucket == 0 {
+            return Err(DomainError::Invalid(
+                "global bucket size must be at least 1".into(),
+            ));
+        }
+        if !(config.h_margin >= 1.0 && config.h_margin.is_finite()) {
+            return Err(DomainError::Invalid(format!(
+                "smoothing-length margin {} must be a finite number >= 1",
+                config.h_margin
+            )));
+        }
+        Ok(Self {
+            comm,
+            config,
+            tree: GlobalTree::uniform(1),
+            counts: Vec::new(),
+            assignment: Assignment::default(),
+            keys: Vec::new(),
+            perm: Vec::new(),
+            scratch: Vec::new(),
+            scratch_keys: Vec::new(),
+            owned: None,
+            peers: Vec::new(),
+            h_limit: f64::INFINITY,
+            stats: SyncStats::default(),
+        })
+    }
+
+    /// The communicator.
+    pub fn comm(&self) -> &C {
+        &self.comm
+    }
+
+    /// The decomposition parameters.
+    pub fn config(&self) -> &DomainConfig {
+        &self.config
+    }
+
+    /// Range of the owned particles in the local arrays (after a sync).
+    pub fn owned(&self) -> Range<usize> {
+        self.owned.clone().unwrap_or(0..0)
+    }
+
+    /// SFC keys of the local arrays (halos and owned), ascending.
+    pub fn keys(&self) -> &[u64] {
+        &self.keys
+    }
+
+    /// The largest smoothing length the halos of this sync cover
+    /// (`h_margin` times the global maximum at sync time; the same on
+    /// every rank).
+    pub fn h_limit(&self) -> f64 {
+        self.h_limit
+    }
+
+    /// Figures of the last sync and the exchanges since.
+    pub fn stats(&self) -> SyncStats {
+        self.stats
+    }
+
+    /// The global tree (replicated on every rank).
+    pub fn global_tree(&self) -> &GlobalTree {
+        &self.tree
+    }
+
+    /// First key owned by each rank, then the end of the key space.
+    pub fn key_ranges(&self) -> &[u64] {
+        &self.assignment.key_start
+    }
+
+    /// Brings the particles into global curve order: refits the open axes of
+    /// `bbox` to all ranks' particles, migrates every particle to the rank
+    /// owning its key and appends the halos. Afterwards the local arrays hold
+    /// halos and owned particles in ascending (key, id) order; the owned ones
+    /// are [`owned`](Self::owned). Two global reductions: the box with the
+    /// largest h, and the tree counts.
+    pub fn sync<P: ParticleFields>(
+        &mut self,
+        p: &mut P,
+        bbox: &mut BoundingBox,
+    ) -> Result<Range<usize>, DomainError> {
+        let start = Instant::now();
+        let mut comm_s = 0.0;
+        let mut bytes = 0u64;
+        if let Some(owned) = self.owned.take() {
+            p.keep(owned);
+        }
+        self.peers.clear();
+
+        // Global box and largest h: one max-reduction.
+        let mut ext = local_extent(p)?;
+        let t = Instant::now();
+        self.comm.all_reduce(&mut ext, ReduceOp::Max);
+        comm_s += t.elapsed().as_secs_f64();
+        if ext[6] == f64::NEG_INFINITY {
+            return Err(DomainError::Empty);
+        }
+        refit(bbox, &ext)?;
+        self.h_limit = ext[6] * self.config.h_margin;
+
+        // Local curve order, then global counts: one sum-reduction.
+        self.sort_local(p, bbox);
+        self.tree.count(&self.keys, &mut self.counts);
+        let t = Instant::now();
+        self.comm.all_reduce(&mut self.counts, ReduceOp::Sum);
+        comm_s += t.elapsed().as_secs_f64();
+        let ranks = self.comm.size();
+        let rank = self.comm.rank();
+        self.assignment = Assignment::balanced(&self.tree, &self.counts, ranks);
+
+        // Migration: the particles outside this rank's key range go to
+        // their owners; sorted keys make them a prefix and a suffix.
+        let (klo, khi) = (
+            self.assignment.key_start[rank],
+            self.assignment.key_start[rank + 1],
+        );
+        let lo = self.keys.partition_point(|&k| k < klo);
+        let hi = self.keys.partition_point(|&k| k < khi);
+        let mut migrated_in = 0;
+        if ranks > 1 {
+            let words = p.packed_words();
+            let mut sends: Vec<(usize, Vec<u64>)> = Vec::new();
+            for i in (0..lo).chain(hi..p.len()) {
+                let owner = self.assignment.owner(self.keys[i]);
+                match sends.last_mut() {
+                    Some((r, buf)) if *r == owner => p.pack(i, buf),
+                    _ => {
+                        let mut buf = Vec::new();
+                        p.pack(i, &mut buf);
+                        sends.push((owner, buf));
+                    }
+                }
+            }
+            bytes += sends.iter().map(|(_, b)| b.len() as u64 * 8).sum::<u64>();
+            let t = Instant::now();
+            let received = self.comm.sparse_exchange(&sends)?;
+            comm_s += t.elapsed().as_secs_f64();
+            p.keep(lo..hi);
+            for (_, buf) in &received {
+                for chunk in buf.chunks_exact(words) {
+                    p.push_packed(chunk);
+                    migrated_in += 1;
+                }
+            }
+            if migrated_in > 0 {
+                self.sort_local(p, bbox);
+            } else {
+                self.keys.drain(hi..);
+                self.keys.drain(..lo);
+            }
+        }
+        let n_owned = p.len();
+
+        // Halos: this rank's particles within reach of another rank's cells.
+        let mut n_low = 0;
+        if ranks > 1 {
+            let radius = 2.0 * self.h_limit;
+            let (sends, plan) = self.find_halos(p, bbox, rank, radius);
+            bytes += sends.iter().map(|(_, b)| b.len() as u64 * 8).sum::<u64>();
+            let t = Instant::now();
+            let received = self.comm.sparse_exchange(&sends)?;
+            comm_s += t.elapsed().as_secs_f64();
+            let words = p.packed_words();
+            let mut recv_ranks = Vec::with_capacity(received.len());
+            for (r, buf) in &received {
+                recv_ranks.push((*r, buf.len() / words.max(1)));
+                for chunk in buf.chunks_exact(words) {
+                    p.push_packed(chunk);
+                }
+            }
+            n_low = self.place_halos(p, bbox, n_owned, klo);
+            // Halo slots: the k-th halo received sits where the sort put it.
+            let mut next = n_owned;
+            let mut peers: Vec<Peer> = plan
+                .into_iter()
+                .map(|(r, send)| Peer {
+                    rank: r,
+                    send: send.into_iter().map(|i| i + n_low as u32).collect(),
+                    recv: Vec::new(),
+                })
+                .collect();
+            for (r, count) in recv_ranks {
+                let slots: Vec<u32> = (next..next + count)
+                    .map(|old| self.scratch_keys[old] as u32)
+                    .collect();
+                next += count;
+                match peers.iter_mut().find(|q| q.rank == r) {
+                    Some(q) => q.recv = slots,
+                    None => peers.push(Peer {
+                        rank: r,
+                        send: Vec::new(),
+                        recv: slots,
+                    }),
+                }
+            }
+            peers.sort_by_key(|q| q.rank);
+            self.peers = peers;
+        }
+
+        // The tree follows the particles: refine/coarsen for the next step.
+        self.tree.rebalance(&self.counts, self.config.bucket);
+        let owned = n_low..n_low + n_owned;
+        self.owned = Some(owned.clone());
+        self.stats = SyncStats {
+            owned: n_owned,
+            halos: p.len() - n_owned,
+            migrated_in,
+            bytes_sent: bytes,
+            comm_seconds: comm_s,
+            sync_seconds: start.elapsed().as_secs_f64(),
+        };
+        Ok(owned)
+    }
+
+    /// Copies the owners' values of `fields` into the halo slots of every
+    /// rank (point to point, with the peers of the last sync).
+    pub fn exchange(&mut self, fields: &mut [&mut [f64]]) -> Result<(), DomainError> {
+        if self.peers.is_empty() {
+            return Ok(());
+        }
+        let nf = fields.len();
+        let sends: Vec<(usize, Vec<f64>)> = self
+            .peers
+            .iter()
+            .filter(|q| !q.send.is_empty())
+            .map(|q| {
+                let mut buf = Vec::with_capacity(q.send.len() * nf);
+                for &i in &q.send {
+                    buf.extend(fields.iter().map(|f| f[i as usize]));
+                }
+                (q.rank, buf)
+            })
+            .collect();
+        self.stats.bytes_sent += sends.iter().map(|(_, b)| b.len() as u64 * 8).sum::<u64>();
+        let t = Instant::now();
+        let received = self.comm.sparse_exchange(&sends)?;
+        self.stats.comm_seconds += t.elapsed().as_secs_f64();
+        for (r, buf) in received {
+            let peer = self
+                .peers
+                .iter()
+                .find(|q| q.rank == r)
+                .ok_or(DomainError::UnexpectedPeer(r))?;
+            if buf.len() != peer.recv.len() * nf {
+                return Err(DomainError::Mismatch {
+                    peer: r,
+                    expected: peer.recv.len() * nf,
+                    got: buf.len(),
+                });
+            }
+            for (k, &slot) in peer.recv.iter().enumerate() {
+                for (f, field) in fields.iter_mut().enumerate() {
+                    field[slot as usize] = buf[k * nf + f];
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Computes keys, sorts by (key, id) and reorders the particles.
+    fn sort_local<P: ParticleFields>(&mut self, p: &mut P, bbox: &BoundingBox) {
+        let [x, y, z] = p.positions();
+        compute_keys(bbox, self.config.curve, x, y, z, &mut self.keys);
+        KeySorter::new().sort(&self.keys, Some(p.ids()), &mut self.perm);
+        p.reorder(&self.perm, &mut self.scratch);
+        sph_tree::apply_permutation(&self.perm, &mut self.keys, &mut self.scratch_keys);
+    }
+
+    /// For each peer, the ascending local indices of the owned particles
+    /// within `radius` of one of its cells, packed for sending.
+    #[allow(clippy::type_complexity)]
+    fn find_halos<P: ParticleFields>(
+        &self,
+        p: &P,
+        bbox: &BoundingBox,
+        rank: usize,
+        radius: f64,
+    ) -> (Vec<(usize, Vec<u64>)>, Vec<(usize, Vec<u32>)>) {
+        let a = &self.assignment;
+        let curve = self.config.curve;
+        let mine = a.leaf_start[rank]..a.leaf_start[rank + 1];
+        let my_boxes: Vec<_> = mine
+            .clone()
+            .map(|l| self.tree.cell_box(l, bbox, curve))
+            .collect();
+        let remote: Vec<usize> = (0..self.tree.num_leaves())
+            .filter(|l| !mine.contains(l))
+            .collect();
+        let remote_boxes: Vec<_> = remote
+            .iter()
+            .map(|&l| self.tree.cell_box(l, bbox, curve))
+            .collect();
+        let remote_owner: Vec<usize> = remote.iter().map(|&l| a.leaf_owner(l)).collect();
+        // Cell boxes come from rounded key arithmetic: pad by a relative hair.
+        let pad = 1e-9 * bbox.lengths().iter().fold(0.0f64, |m, &l| m.max(l));
+        let candidates = candidate_cells(bbox, &my_boxes, &remote_boxes, radius + pad);
+        let r2 = (radius + pad) * (radius + pad);
+        let [x, y, z] = p.positions();
+        let starts = self.tree.starts();
+        // Per own leaf: (peer, particle) pairs, in particle order.
+        let per_leaf: Vec<Vec<(usize, u32)>> = mine
+            .clone()
+            .into_par_iter()
+            .zip(candidates.par_iter())
+            .map(|(leaf, cands)| {
+                let mut out = Vec::new();
+                if cands.is_empty() {
+                    return out;
+                }
+                let lo = self.keys.partition_point(|&k| k < starts[leaf]);
+                let hi = self.keys.partition_point(|&k| k < starts[leaf + 1]);
+                let mut peers: Vec<usize> = Vec::new();
+                for i in lo..hi {
+                    peers.clear();
+                    let pos = [x[i], y[i], z[i]];
+                    for &c in cands {
+                        let owner = remote_owner[c as usize];
+                        if !peers.contains(&owner) {
+                            let (blo, bhi) = remote_boxes[c as usize];
+                            if bbox.distance2_to_box(pos, blo, bhi) < r2 {
+                                peers.push(owner);
+                            }
+                        }
+                    }
+                    out.extend(peers.iter().map(|&r| (r, i as u32)));
+                }
+                out
+            })
+            .collect();
+        let mut plan: Vec<(usize, Vec<u32>)> = Vec::new();
+        for pairs in per_leaf {
+            for (r, i) in pairs {
+                match plan.iter_mut().find(|(q, _)| *q == r) {
+                    Some((_, v)) => v.push(i),
+                    None => plan.push((r, vec![i])),
+                }
+            }
+        }
+        plan.sort_by_key(|(r, _)| *r);
+        let sends = plan
+            .iter()
+            .map(|(r, idx)| {
+                let mut buf = Vec::with_capacity(idx.len() * p.packed_words());
+                for &i in idx {
+                    p.pack(i as usize, &mut buf);
+                }
+                (*r, buf)
+            })
+            .collect();
+        (sends, plan)
+    }
+
+    /// Puts the halos appended after the `n_owned` owned particles into
+    /// curve order around them: halos with keys below `klo` first, then the
+    /// owned particles, then the rest. Returns the number of leading halos
+    /// and leaves in `scratch_keys[old]` the new index of each old index.
+    fn place_halos<P: ParticleFields>(
+        &mut self,
+        p: &mut P,
+        bbox: &BoundingBox,
+        n_owned: usize,
+        klo: u64,
+    ) -> usize {
+        let n = p.len();
+        let [x, y, z] = p.positions();
+        let mut halo_keys = Vec::new();
+        compute_keys(
+            bbox,
+            self.config.curve,
+            &x[n_owned..],
+            &y[n_owned..],
+            &z[n_owned..],
+            &mut halo_keys,
+        );
+        let ids = &p.ids()[n_owned..];
+        let mut order: Vec<u32> = (0..(n - n_owned) as u32).collect();
+        order.sort_unstable_by_key(|&a| (halo_keys[a as usize], ids[a as usize]));
+        let n_low = order.partition_point(|&a| halo_keys[a as usize] < klo);
+        self.perm.clear();
+        self.perm
+            .extend(order[..n_low].iter().map(|&a| a + n_owned as u32));
+        self.perm.extend(0..n_owned as u32);
+        self.perm
+            .extend(order[n_low..].iter().map(|&a| a + n_owned as u32));
+        let mut keys = Vec::with_capacity(n);
+        keys.extend(order[..n_low].iter().map(|&a| halo_keys[a as usize]));
+        keys.extend_from_slice(&self.keys[..n_owned]);
+        keys.extend(order[n_low..].iter().map(|&a| halo_keys[a as usize]));
+        self.keys = keys;
+        p.reorder(&self.perm, &mut self.scratch);
+        // Inverse permutation: new index of each old index.
+        self.scratch_keys.clear();
+        self.scratch_keys.resize(n, 0);
+        for (new, &old) in self.perm.iter().enumerate() {
+            self.scratch_keys[old as usize] = new as u64;
+        }
+        n_low
+    }
+}
+
+/// `[-min x, -min y, -min z, max x, max y, max z, max h]` of the particles.
+fn local_extent<P: ParticleFields>(p: &P) -> Result<[f64; 7], DomainError> {
+    let [x, y, z] = p.positions();
+    let h = p.smoothing_lengths();
+    let mut e = [f64::NEG_INFINITY; 7];
+    for i in 0..p.len() {
+        let v = [x[i], y[i], z[i], h[i]];
+        if let Some(k) = v.iter().position(|a| !a.is_finite()) {
+            return Err(DomainError::NonFinite {
+                id: p.ids()[i],
+                what: ["x", "y", "z", "h"][k],
+                value: v[k],
+            });
+        }
+        for k in 0..3 {
+            e[k] = e[k].max(-v[k]);
+            e[k + 3] = e[k + 3].max(v[k]);
+        }
+        e[6] = e[6].max(v[3]);
+    }
+    Ok(e)
+}
+
+/// Sets the open axes of `bbox` to the global extent, padded as
+/// [`BoundingBox::enclosing`] pads.
+fn refit(bbox: &mut BoundingBox, ext: &[f64; 7]) -> Result<(), DomainError> {
+    let b = bbox.boundary();
+    if b.iter().all(|&k| k == Boundary::Periodic) {
+        return Ok(());
+    }
+    let (mut lo, mut hi) = (bbox.lo(), bbox.hi());
+    for k in 0..3 {
+        if b[k] == Boundary::Open {
+            let (l, h) = (-ext[k], ext[k + 3]);
+            let scale = (h - l).max(l.abs().max(h.abs())).max(f64::MIN_POSITIVE);
+            lo[k] = l - scale * 1e-9;
+            hi[k] = h + scale * 1e-9;
+        }
+    }
+    *bbox = BoundingBox::new(lo, hi, b)?;
+    Ok(())
+}

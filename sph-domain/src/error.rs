@@ -1,0 +1,44 @@
+//! Errors of the domain crate.
+
+use sph_comm::CommError;
+use sph_tree::TreeError;
+
+/// What can go wrong while decomposing or exchanging.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DomainError {
+    /// A bad parameter.
+    #[error("{0}")]
+    Invalid(String),
+    /// No rank holds any particle.
+    #[error("the domain is empty: no rank holds a particle")]
+    Empty,
+    /// A particle with a non-finite coordinate or smoothing length.
+    #[error("particle {id} has a non-finite {what}: {value}")]
+    NonFinite {
+        /// Particle id.
+        id: u64,
+        /// Which quantity.
+        what: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// A halo message from a rank that is no peer of the last sync.
+    #[error("halo message from rank {0}, which is not a peer of the last sync")]
+    UnexpectedPeer(usize),
+    /// A halo message of the wrong length.
+    #[error("halo message from rank {peer} holds {got} values, expected {expected}")]
+    Mismatch {
+        /// Sending rank.
+        peer: usize,
+        /// Values expected.
+        expected: usize,
+        /// Values received.
+        got: usize,
+    },
+    /// Communication failed.
+    #[error(transparent)]
+    Comm(#[from] CommError),
+    /// A box could not be built.
+    #[error(transparent)]
+    Tree(#[from] TreeError),
+}

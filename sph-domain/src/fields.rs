@@ -1,0 +1,36 @@
+//! What the domain needs to know of a particle container.
+
+use std::ops::Range;
+
+/// A structure-of-arrays particle container that a
+/// [`Domain`](crate::Domain) can sort, migrate and extend with halos.
+///
+/// Particles travel as packed `u64` words (`f64` fields as their bits), so a
+/// container decides itself which fields persist across steps (positions,
+/// velocities, h, mass, internal energy, integrator history, ...). Fields
+/// that every step recomputes (density, forces) need not travel: unpacked
+/// particles may hold anything there.
+pub trait ParticleFields {
+    /// Number of particles held (owned and halos).
+    fn len(&self) -> usize;
+    /// Whether no particle is held.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// Unique particle ids.
+    fn ids(&self) -> &[u64];
+    /// Coordinates.
+    fn positions(&self) -> [&[f64]; 3];
+    /// Smoothing lengths.
+    fn smoothing_lengths(&self) -> &[f64];
+    /// Words per packed particle.
+    fn packed_words(&self) -> usize;
+    /// Appends particle `i`, packed, to `out`.
+    fn pack(&self, i: usize, out: &mut Vec<u64>);
+    /// Appends one particle from `packed_words()` words.
+    fn push_packed(&mut self, words: &[u64]);
+    /// Keeps only the particles in `range` (in order).
+    fn keep(&mut self, range: Range<usize>);
+    /// Reorders every field: `new[i] = old[perm[i]]`.
+    fn reorder(&mut self, perm: &[u32], scratch: &mut Vec<u64>);
+}
