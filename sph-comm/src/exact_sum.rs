@@ -1,22 +1,4 @@
-//! Reproducible, exactly rounded summation of `f64` values.
-//!
-//! # Representation
-//! Every finite `f64` is an integer multiple of `2^-1074` below `2^1024`, so
-//! the exact sum of any finite set of them is an integer multiple of
-//! `2^-1074` too. [`ExactSum`] keeps that integer in a fixed-point
-//! superaccumulator of [`LIMBS`] signed 64-bit limbs, limb `i` weighing
-//! `2^(32 i - 1074)`. Adding a value adds its 53-bit significand, shifted into
-//! place, to at most three limbs (32 payload bits each), so the 32 spare bits
-//! of every limb absorb about `2^30` additions before a carry pass
-//! ("normalisation") is needed. Integer addition is associative and
-//! commutative, so the accumulator — and therefore the final rounding —
-//! does not depend on the order or grouping of the additions, on the number
-//! of rayon threads, or on the number of MPI ranks.
-//!
-//! The value is rounded once, at the end, to the nearest `f64` (ties to
-//! even), exactly like a single IEEE addition would round the true sum.
-//! Infinities and NaNs are counted separately and reproduce IEEE semantics
-//! (`inf + -inf = NaN`); an exact sum of zero is `+0.0`.
+//! Reproducible, exactly rounded summation of `f64` values (see [`ExactSum`]).
 
 use std::fmt;
 use std::iter::Sum;
@@ -38,9 +20,27 @@ const MASK: i64 = (1 << 32) - 1;
 /// `MAX_PENDING` additions limbs stay below `2^62`.
 const MAX_PENDING: u64 = 1 << 30;
 
-/// Exact, order-independent sum of `f64` values; see the
-/// [module documentation](self) for the method.
+/// Exact, order-independent sum of `f64` values.
 ///
+/// # Representation
+/// Every finite `f64` is an integer multiple of `2^-1074` below `2^1024`, so
+/// the exact sum of any finite set of them is an integer multiple of
+/// `2^-1074` too. [`ExactSum`] keeps that integer in a fixed-point
+/// superaccumulator of [`LIMBS`] signed 64-bit limbs, limb `i` weighing
+/// `2^(32 i - 1074)`. Adding a value adds its 53-bit significand, shifted into
+/// place, to at most three limbs (32 payload bits each), so the 32 spare bits
+/// of every limb absorb about `2^30` additions before a carry pass
+/// ("normalisation") is needed. Integer addition is associative and
+/// commutative, so the accumulator — and therefore the final rounding —
+/// does not depend on the order or grouping of the additions, on the number
+/// of rayon threads, or on the number of MPI ranks.
+///
+/// The value is rounded once, at the end, to the nearest `f64` (ties to
+/// even), exactly like a single IEEE addition would round the true sum.
+/// Infinities and NaNs are counted separately and reproduce IEEE semantics
+/// (`inf + -inf = NaN`); an exact sum of zero is `+0.0`.
+///
+/// # Example
 /// ```
 /// use sph_comm::ExactSum;
 /// let mut s = ExactSum::new();

@@ -45,7 +45,7 @@
 //! costs no collective of size `O(P)` (unlike a count all-to-all first) and
 //! one message per actual peer, which is what the halo exchange needs.
 
-#![forbid(unsafe_op_in_unsafe_fn)]
+#![deny(missing_docs)]
 
 mod communicator;
 mod error;
