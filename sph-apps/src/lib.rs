@@ -55,6 +55,9 @@ pub enum AppError {
     /// A bad kernel choice.
     #[error(transparent)]
     Kernel(#[from] sph_kernels::KernelError),
+    /// Communication between ranks failed.
+    #[error(transparent)]
+    Comm(#[from] sph_comm::CommError),
     /// A bad reference-solution parameter.
     #[error(transparent)]
     Reference(#[from] reference::ReferenceError),

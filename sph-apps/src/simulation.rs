@@ -6,7 +6,9 @@ use crate::analysis::{self, Bin, L1};
 use crate::cases::{Reference, Scene};
 use crate::AppError;
 use serde::Serialize;
-use sph_core::{Conserved, Hydro, StepReport, STAGES};
+use sph_comm::{Communicator, ReduceOp, SerialComm};
+use sph_core::{Conserved, FieldSet, Hydro, Particles, StepReport, STAGES};
+use sph_domain::DomainConfig;
 use sph_kernels::Tabulated;
 use std::fs::File;
 use std::io::{BufWriter, IsTerminal, Write};
@@ -84,48 +86,177 @@ pub struct Summary {
     pub angular_momentum_z: [f64; 2],
     /// Energy updates that fell back to first order.
     pub energy_fallbacks: usize,
+    /// MPI ranks (1 for a serial run).
+    pub ranks: usize,
+    /// Decomposition figures, means over steps 2..N.
+    pub domain: DomainSummary,
 }
 
-/// A run in progress: the scene's particles and the pipeline.
+/// Decomposition figures of a run (means over steps 2..N).
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct DomainSummary {
+    /// Fewest particles on a rank (last step).
+    pub owned_min: usize,
+    /// Most particles on a rank (last step).
+    pub owned_max: usize,
+    /// Mean over steps of total halos / total owned.
+    pub halo_ratio_mean: f64,
+    /// Mean over steps of the largest halos / owned of a rank.
+    pub halo_ratio_max: f64,
+    /// Mean bytes sent per step, all ranks together.
+    pub bytes_sent_per_step: f64,
+    /// Mean over steps of the longest per-rank time in domain communication.
+    pub comm_seconds_per_step: f64,
+    /// Mean over steps of the longest per-rank time in `sync`.
+    pub sync_seconds_per_step: f64,
+}
+
+/// A run in progress: the scene's particles (this rank's share) and the
+/// pipeline.
 #[derive(Debug)]
-pub struct Simulation {
+pub struct Simulation<C: Communicator = SerialComm> {
     scene: Scene,
-    hydro: Hydro<Tabulated>,
+    hydro: Hydro<Tabulated, C>,
     kernel_name: String,
+    total: usize,
+    write_particles: bool,
 }
 
 impl Simulation {
-    /// Assembles the pipeline the scene needs with the given kernel table.
+    /// Assembles the serial pipeline the scene needs with the given kernel
+    /// table.
     pub fn new(scene: Scene, kernel: Tabulated, kernel_name: String) -> Result<Self, AppError> {
+        Simulation::with_comm(scene, kernel, kernel_name, SerialComm::new())
+    }
+}
+
+impl<C: Communicator> Simulation<C> {
+    /// Assembles the pipeline on one rank of `comm`. Every rank passes the
+    /// whole scene and keeps a contiguous share of its particles; the first
+    /// step migrates them to their owners.
+    pub fn with_comm(
+        scene: Scene,
+        kernel: Tabulated,
+        kernel_name: String,
+        comm: C,
+    ) -> Result<Self, AppError> {
         let mut scene = scene;
-        let hydro = Hydro::new(kernel, scene.config, 0.0, scene.dt0)?;
+        let total = scene.particles.len();
+        let (rank, size) = (comm.rank(), comm.size());
+        scene
+            .particles
+            .keep(total * rank / size..total * (rank + 1) / size);
+        let hydro = Hydro::with_comm(
+            kernel,
+            scene.config,
+            0.0,
+            scene.dt0,
+            comm,
+            DomainConfig::default(),
+        )?;
         hydro.prepare(&mut scene.particles);
         Ok(Self {
             scene,
             hydro,
             kernel_name,
+            total,
+            write_particles: false,
         })
     }
 
-    /// The scene (particles at the current state).
+    /// The scene (this rank's particles at the current state, halos
+    /// included after a step: see [`Simulation::owned`]).
     pub fn scene(&self) -> &Scene {
         &self.scene
     }
 
-    /// Runs until `stop`, writing outputs into `out` (created if needed).
-    pub fn run(&mut self, stop: Stop, out: &Path, progress: Progress) -> Result<Summary, AppError> {
-        std::fs::create_dir_all(out).map_err(|e| AppError::io(out, e))?;
-        let mut conserved_csv = CsvFile::create(&out.join("conserved.csv"))?;
-        conserved_csv
-            .line("step,t,dt,E_kin,E_int,E_tot,px,py,pz,Lx,Ly,Lz,nc_min,nc_max,nc_mean")?;
-        let mut timings_csv = CsvFile::create(&out.join("timings.csv"))?;
-        timings_csv.line(&format!("step,{},total", STAGES.join(",")))?;
+    /// Range of this rank's own particles in the scene's arrays.
+    pub fn owned(&self) -> std::ops::Range<usize> {
+        self.hydro.owned()
+    }
 
-        let n = self.scene.particles.len();
-        let bar = ProgressReporter::new(progress, stop);
+    /// Whether this rank writes the outputs (rank 0).
+    pub fn is_root(&self) -> bool {
+        self.hydro.domain().comm().rank() == 0
+    }
+
+    /// Every rank's owned particles, sorted by id, on every rank (for
+    /// observables and state dumps): id, position, velocity, h, m, u, rho, P.
+    pub fn gather(&self) -> Result<Particles, AppError> {
+        let p = &self.scene.particles;
+        let owned = self.hydro.owned();
+        let fields = |p: &Particles| -> [Vec<f64>; 11] {
+            [
+                p.x.clone(),
+                p.y.clone(),
+                p.z.clone(),
+                p.vx.clone(),
+                p.vy.clone(),
+                p.vz.clone(),
+                p.h.clone(),
+                p.m.clone(),
+                p.u.clone(),
+                p.rho.clone(),
+                p.p.clone(),
+            ]
+        };
+        let mut words = Vec::with_capacity(owned.len() * 12);
+        let local = fields(p);
+        for i in owned {
+            words.push(p.id[i]);
+            words.extend(local.iter().map(|f| f[i].to_bits()));
+        }
+        let all = self.hydro.domain().comm().all_gather_v(&words)?;
+        let mut rows: Vec<&[u64]> = all.data.chunks_exact(12).collect();
+        rows.sort_unstable_by_key(|r| r[0]);
+        let mut g = Particles::new(
+            rows.len(),
+            FieldSet {
+                iad: false,
+                grad_h: false,
+            },
+        );
+        for (k, r) in rows.iter().enumerate() {
+            g.id[k] = r[0];
+            let f = |j: usize| f64::from_bits(r[j]);
+            (g.x[k], g.y[k], g.z[k]) = (f(1), f(2), f(3));
+            (g.vx[k], g.vy[k], g.vz[k]) = (f(4), f(5), f(6));
+            (g.h[k], g.m[k], g.u[k], g.rho[k], g.p[k]) = (f(7), f(8), f(9), f(10), f(11));
+        }
+        Ok(g)
+    }
+
+    /// Also write the final state of every particle (`particles.csv`,
+    /// sorted by id, shortest round-trip decimals: the exact bits).
+    pub fn set_write_particles(&mut self, on: bool) {
+        self.write_particles = on;
+    }
+
+    /// Runs until `stop`, writing outputs into `out` (created if needed; by
+    /// rank 0 alone).
+    pub fn run(&mut self, stop: Stop, out: &Path, progress: Progress) -> Result<Summary, AppError> {
+        let root = self.is_root();
+        let mut conserved_csv = None;
+        let mut timings_csv = None;
+        if root {
+            std::fs::create_dir_all(out).map_err(|e| AppError::io(out, e))?;
+            let mut c = CsvFile::create(&out.join("conserved.csv"))?;
+            c.line("step,t,dt,E_kin,E_int,E_tot,px,py,pz,Lx,Ly,Lz,nc_min,nc_max,nc_mean")?;
+            let mut t = CsvFile::create(&out.join("timings.csv"))?;
+            t.line(&format!(
+                "step,{},total,owned_min,owned_max,halo_ratio,halo_ratio_max,bytes_sent,comm_s_max,sync_s_max",
+                STAGES.join(",")
+            ))?;
+            conserved_csv = Some(c);
+            timings_csv = Some(t);
+        }
+
+        let n = self.total;
+        let bar = ProgressReporter::new(if root { progress } else { Progress::Quiet }, stop);
         let start = Instant::now();
         let mut first: Option<Conserved> = None;
         let mut stage_sum = [0.0; 9];
+        let mut dom = DomainSummary::default();
         let mut timed_steps = 0u64;
         let mut fallbacks = 0;
         let mut last_report: Option<StepReport> = None;
@@ -144,43 +275,82 @@ impl Simulation {
                 .hydro
                 .step(&mut self.scene.particles, &mut self.scene.bbox)?;
             first.get_or_insert(r.conserved);
+            let d = r.domain;
+            let halo_ratio = d.halos_total as f64 / n.max(1) as f64;
             if r.step >= 2 {
                 for k in 0..9 {
                     stage_sum[k] += r.times.0[k];
                 }
+                dom.halo_ratio_mean += halo_ratio;
+                dom.halo_ratio_max += d.halo_ratio_max;
+                dom.bytes_sent_per_step += d.bytes_sent as f64;
+                dom.comm_seconds_per_step += d.comm_seconds_max;
+                dom.sync_seconds_per_step += d.sync_seconds_max;
                 timed_steps += 1;
             }
+            (dom.owned_min, dom.owned_max) = (d.owned_min, d.owned_max);
             fallbacks += r.energy_fallbacks;
             let c = &r.conserved;
-            conserved_csv.line(&format!(
-                "{},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{},{},{:.6}",
-                r.step, r.t, r.dt, c.e_kin, c.e_int, c.e_tot(),
-                c.momentum[0], c.momentum[1], c.momentum[2],
-                c.angular_momentum[0], c.angular_momentum[1], c.angular_momentum[2],
-                r.neighbors.min_count, r.neighbors.max_count,
-                r.neighbors.total as f64 / n.max(1) as f64
-            ))?;
-            let times: Vec<String> = r.times.0.iter().map(|s| format!("{s:.6e}")).collect();
-            timings_csv.line(&format!(
-                "{},{},{:.6e}",
-                r.step,
-                times.join(","),
-                r.times.total()
-            ))?;
+            if let (Some(cc), Some(tc)) = (conserved_csv.as_mut(), timings_csv.as_mut()) {
+                cc.line(&format!(
+                    "{},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{},{},{:.6}",
+                    r.step, r.t, r.dt, c.e_kin, c.e_int, c.e_tot(),
+                    c.momentum[0], c.momentum[1], c.momentum[2],
+                    c.angular_momentum[0], c.angular_momentum[1], c.angular_momentum[2],
+                    r.neighbors.min_count, r.neighbors.max_count,
+                    r.neighbors.total as f64 / n.max(1) as f64
+                ))?;
+                let times: Vec<String> = r.times.0.iter().map(|s| format!("{s:.6e}")).collect();
+                tc.line(&format!(
+                    "{},{},{:.6e},{},{},{:.6e},{:.6e},{},{:.6e},{:.6e}",
+                    r.step,
+                    times.join(","),
+                    r.times.total(),
+                    d.owned_min,
+                    d.owned_max,
+                    halo_ratio,
+                    d.halo_ratio_max,
+                    d.bytes_sent,
+                    d.comm_seconds_max,
+                    d.sync_seconds_max
+                ))?;
+            }
             bar.update(&r, self.hydro.time());
             last_report = Some(r);
         }
         let wall_s = start.elapsed().as_secs_f64();
         bar.finish();
-        conserved_csv.flush()?;
-        timings_csv.flush()?;
+        if let (Some(cc), Some(tc)) = (conserved_csv.as_mut(), timings_csv.as_mut()) {
+            cc.flush()?;
+            tc.flush()?;
+        }
+        let steps_div = timed_steps.max(1) as f64;
+        dom.halo_ratio_mean /= steps_div;
+        dom.halo_ratio_max /= steps_div;
+        dom.bytes_sent_per_step /= steps_div;
+        dom.comm_seconds_per_step /= steps_div;
+        dom.sync_seconds_per_step /= steps_div;
 
-        // Observables at the final state.
+        // Observables at the final state, from every rank's particles.
         let t_end = self.hydro.time();
         self.hydro
             .evaluate_density(&mut self.scene.particles, &mut self.scene.bbox)?;
-        let p = &self.scene.particles;
-        let end = Conserved::compute(p, n);
+        let comm = self.hydro.domain().comm();
+        let min_pair2 = comm.all_reduce_scalar(
+            analysis::min_pair_distance(
+                &self.scene.particles,
+                self.hydro.neighbor_list(),
+                &self.scene.bbox,
+            ),
+            ReduceOp::Min,
+        );
+        let peak_rss = comm.all_reduce_scalar(analysis::peak_rss_bytes(), ReduceOp::Max);
+        let local_bytes = (self.scene.particles.bytes_per_particle() * self.hydro.owned().len()
+            + self.hydro.buffer_bytes()) as u64;
+        let total_bytes = comm.all_reduce_scalar(local_bytes, ReduceOp::Sum);
+        let ranks = comm.size();
+        let p = &self.gather()?;
+        let (end, []) = Conserved::compute(p, 0..p.len(), [], &SerialComm::new());
         let first = first.unwrap_or(end);
         let mean_step_s = if timed_steps > 0 {
             stage_sum.iter().sum::<f64>() / timed_steps as f64
@@ -189,24 +359,14 @@ impl Simulation {
         };
         let mut stage_seconds = std::collections::BTreeMap::new();
         for (k, name) in STAGES.iter().enumerate() {
-            stage_seconds.insert(name.to_string(), stage_sum[k] / timed_steps.max(1) as f64);
+            stage_seconds.insert(name.to_string(), stage_sum[k] / steps_div);
         }
-        // Last row: the mean over steps 2..N (step 1 holds set-up costs).
-        let means: Vec<String> = stage_sum
-            .iter()
-            .map(|s| format!("{:.6e}", s / timed_steps.max(1) as f64))
-            .collect();
-        timings_csv.line(&format!("mean_2..N,{},{mean_step_s:.6e}", means.join(",")))?;
-        timings_csv.flush()?;
         let reference = self.scene.reference.clone();
         // Radial bins out to the half-width of the (final) box, which every
         // case centres on the origin.
         let [lx, ly, lz] = self.scene.bbox.lengths();
         let r_max = 0.5 * lx.max(ly).max(lz);
         let bins = analysis::radial_profile(p, reference.as_ref(), t_end, r_max, 100);
-        write_profile(&out.join("profile.csv"), &bins)?;
-        let title = format!("{}, {n} particles, t = {t_end:.4}", self.scene.case);
-        crate::plot::profile_png(&out.join("profile.png"), &title, &bins)?;
         let (shock_radius, shock_radius_ref, plateau, plateau_ref) = match &reference {
             Some(Reference::Sedov(s)) => (
                 Some(analysis::peak_radius(&bins)),
@@ -254,9 +414,8 @@ impl Simulation {
             wall_s,
             mean_step_s,
             particle_steps_per_s: n as f64 / mean_step_s,
-            peak_rss_bytes: analysis::peak_rss_bytes(),
-            bytes_per_particle: (p.bytes_per_particle() * n + self.hydro.buffer_bytes()) as f64
-                / n.max(1) as f64,
+            peak_rss_bytes: peak_rss,
+            bytes_per_particle: total_bytes as f64 / n.max(1) as f64,
             threads: rayon::current_num_threads(),
             kernel: self.kernel_name.clone(),
             neighbors_mean: last_report.map_or(0.0, |r| r.neighbors.total as f64 / n.max(1) as f64),
@@ -270,18 +429,59 @@ impl Simulation {
             peak_density: p.rho.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
             plateau_density: plateau,
             plateau_density_ref: plateau_ref,
-            min_pair_distance: analysis::min_pair_distance(
-                p,
-                self.hydro.neighbor_list(),
-                &self.scene.bbox,
-            ),
+            min_pair_distance: min_pair2,
             angular_momentum_z: [first.angular_momentum[2], end.angular_momentum[2]],
             energy_fallbacks: fallbacks,
+            ranks,
+            domain: dom,
         };
-        let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
-        std::fs::write(out.join("summary.json"), json + "\n").map_err(|e| AppError::io(out, e))?;
+        if root {
+            // Last row: the mean over steps 2..N (step 1 holds set-up costs).
+            let means: Vec<String> = stage_sum
+                .iter()
+                .map(|s| format!("{:.6e}", s / steps_div))
+                .collect();
+            if let Some(tc) = timings_csv.as_mut() {
+                tc.line(&format!(
+                    "mean_2..N,{},{mean_step_s:.6e},{},{},{:.6e},{:.6e},{:.0},{:.6e},{:.6e}",
+                    means.join(","),
+                    dom.owned_min,
+                    dom.owned_max,
+                    dom.halo_ratio_mean,
+                    dom.halo_ratio_max,
+                    dom.bytes_sent_per_step,
+                    dom.comm_seconds_per_step,
+                    dom.sync_seconds_per_step
+                ))?;
+                tc.flush()?;
+            }
+            write_profile(&out.join("profile.csv"), &bins)?;
+            let title = format!("{}, {n} particles, t = {t_end:.4}", self.scene.case);
+            crate::plot::profile_png(&out.join("profile.png"), &title, &bins)?;
+            if self.write_particles {
+                write_particles(&out.join("particles.csv"), p)?;
+            }
+            let json = serde_json::to_string_pretty(&summary).expect("summary serialises");
+            std::fs::write(out.join("summary.json"), json + "\n")
+                .map_err(|e| AppError::io(out, e))?;
+        }
         Ok(summary)
     }
+}
+
+/// The state of every particle, one row per particle in id order; floats in
+/// Rust's shortest round-trip form, so the file holds the exact bits.
+fn write_particles(path: &Path, p: &Particles) -> Result<(), AppError> {
+    let mut f = CsvFile::create(path)?;
+    f.line("id,x,y,z,vx,vy,vz,h,m,u,rho,p")?;
+    for i in 0..p.len() {
+        f.line(&format!(
+            "{},{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?}",
+            p.id[i], p.x[i], p.y[i], p.z[i], p.vx[i], p.vy[i], p.vz[i], p.h[i], p.m[i], p.u[i],
+            p.rho[i], p.p[i]
+        ))?;
+    }
+    f.flush()
 }
 
 fn write_profile(path: &Path, bins: &[Bin]) -> Result<(), AppError> {

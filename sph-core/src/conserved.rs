@@ -1,12 +1,15 @@
-//! Conserved quantities, summed in a fixed order so that the result does
-//! not depend on the number of threads.
+//! Conserved quantities, summed exactly ([`ExactSum`]) so that the result
+//! is the same bits whatever the number of threads or ranks.
 
 use crate::Particles;
 use rayon::prelude::*;
+use sph_comm::{Communicator, ExactSum};
+use std::ops::Range;
 
-/// Particles per partial sum: partial sums are formed over fixed chunks and
-/// then added in chunk order, independent of the thread count.
+/// Particles per partial sum (one set of accumulators per chunk).
 const CHUNK: usize = 4096;
+/// Sums per particle: mass, E_kin, E_int, momentum (3), angular momentum (3).
+const SUMS: usize = 9;
 
 /// Totals over all particles.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -29,40 +32,58 @@ impl Conserved {
         self.e_kin + self.e_int
     }
 
-    fn add(mut self, o: &Self) -> Self {
-        self.mass += o.mass;
-        self.e_kin += o.e_kin;
-        self.e_int += o.e_int;
-        for k in 0..3 {
-            self.momentum[k] += o.momentum[k];
-            self.angular_momentum[k] += o.angular_momentum[k];
-        }
-        self
-    }
-
-    /// Sums over the first `n_owned` particles of `p` (halos excluded).
-    pub fn compute(p: &Particles, n_owned: usize) -> Self {
-        let partial: Vec<Conserved> = (0..n_owned.div_ceil(CHUNK))
+    /// Sums over the `owned` particles of `p` on every rank of `comm`, plus
+    /// the rank's `extra` values (summed exactly as well, returned reduced):
+    /// one all-reduce in all.
+    pub fn compute<C: Communicator, const E: usize>(
+        p: &Particles,
+        owned: Range<usize>,
+        extra: [f64; E],
+        comm: &C,
+    ) -> (Self, [f64; E]) {
+        let chunks = owned.len().div_ceil(CHUNK);
+        let mut sums: Vec<ExactSum> = (0..chunks)
             .into_par_iter()
             .map(|c| {
-                let mut s = Conserved::default();
-                for i in c * CHUNK..((c + 1) * CHUNK).min(n_owned) {
+                let mut s: [ExactSum; SUMS] = Default::default();
+                let lo = owned.start + c * CHUNK;
+                for i in lo..(lo + CHUNK).min(owned.end) {
                     let m = p.m[i];
                     let v = [p.vx[i], p.vy[i], p.vz[i]];
                     let x = [p.x[i], p.y[i], p.z[i]];
-                    s.mass += m;
-                    s.e_kin += 0.5 * m * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-                    s.e_int += m * p.u[i];
+                    s[0].add(m);
+                    s[1].add(0.5 * m * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]));
+                    s[2].add(m * p.u[i]);
                     for k in 0..3 {
-                        s.momentum[k] += m * v[k];
+                        s[3 + k].add(m * v[k]);
                     }
-                    s.angular_momentum[0] += m * (x[1] * v[2] - x[2] * v[1]);
-                    s.angular_momentum[1] += m * (x[2] * v[0] - x[0] * v[2]);
-                    s.angular_momentum[2] += m * (x[0] * v[1] - x[1] * v[0]);
+                    s[6].add(m * (x[1] * v[2] - x[2] * v[1]));
+                    s[7].add(m * (x[2] * v[0] - x[0] * v[2]));
+                    s[8].add(m * (x[0] * v[1] - x[1] * v[0]));
                 }
                 s
             })
+            .reduce(
+                || Default::default(),
+                |mut a, b| {
+                    for (x, y) in a.iter_mut().zip(b.iter()) {
+                        x.merge(y);
+                    }
+                    a
+                },
+            )
+            .into_iter()
             .collect();
-        partial.iter().fold(Conserved::default(), |a, b| a.add(b))
+        sums.extend(extra.iter().map(|&e| std::iter::once(e).collect::<ExactSum>()));
+        ExactSum::all_reduce_many(&mut sums, comm);
+        let v: Vec<f64> = sums.iter().map(ExactSum::value).collect();
+        let c = Conserved {
+            mass: v[0],
+            e_kin: v[1],
+            e_int: v[2],
+            momentum: [v[3], v[4], v[5]],
+            angular_momentum: [v[6], v[7], v[8]],
+        };
+        (c, std::array::from_fn(|k| v[SUMS + k]))
     }
 }

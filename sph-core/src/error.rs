@@ -65,6 +65,9 @@ pub enum CoreError {
     /// Arrays of different lengths, or a bad parameter.
     #[error("invalid input: {0}")]
     Invalid(String),
+    /// Failure of the domain decomposition or its communication.
+    #[error(transparent)]
+    Domain(#[from] sph_domain::DomainError),
     /// Failure in the tree crate.
     #[error(transparent)]
     Tree(#[from] TreeError),

@@ -10,11 +10,11 @@ use crate::momentum::{momentum_energy, Gradients, HydroState, MomentumStats, Pai
 use crate::neighbors::{find_neighbors, NeighborParams};
 use crate::timestep::TimestepParams;
 use crate::{CoreError, Particles};
+use sph_comm::{Communicator, ReduceOp, SerialComm};
+use sph_domain::{Domain, DomainConfig, SyncStats};
 use sph_kernels::Kernel;
-use sph_tree::{
-    compute_keys, Boundary, BoundingBox, CompactNeighborList, Curve, KeySorter, NeighborStats,
-    Octree,
-};
+use sph_tree::{BoundingBox, CompactNeighborList, Curve, NeighborStats, Octree};
+use std::ops::Range;
 use std::time::Instant;
 
 /// Everything that defines the hydrodynamics scheme.
@@ -59,7 +59,7 @@ impl Default for HydroConfig {
 
 /// Names of the timed stages, in pipeline order.
 pub const STAGES: [&str; 9] = [
-    "sort",
+    "sync",
     "tree",
     "neighbors",
     "density",
@@ -81,6 +81,26 @@ impl StageTimes {
     }
 }
 
+/// The domain decomposition over all ranks in one step (from the step's
+/// two global reductions; a serial run has one rank and no halos).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct DomainStepStats {
+    /// Fewest particles owned by a rank.
+    pub owned_min: usize,
+    /// Most particles owned by a rank.
+    pub owned_max: usize,
+    /// Halo particles summed over ranks.
+    pub halos_total: usize,
+    /// Largest halos / owned ratio of a rank.
+    pub halo_ratio_max: f64,
+    /// Bytes sent by all ranks (migration, halos, field exchanges).
+    pub bytes_sent: u64,
+    /// Longest time a rank spent in the domain's communication calls.
+    pub comm_seconds_max: f64,
+    /// Longest time a rank spent in `sync` (communication included).
+    pub sync_seconds_max: f64,
+}
+
 /// What one step did.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StepReport {
@@ -92,26 +112,30 @@ pub struct StepReport {
     pub dt: f64,
     /// Conserved quantities at `t`.
     pub conserved: Conserved,
-    /// Neighbour statistics of this step.
+    /// Neighbour statistics of this step over all ranks (`first_over_cap`
+    /// is a local index of this rank).
     pub neighbors: NeighborStats,
     /// Seconds per stage in this step.
     pub times: StageTimes,
     /// Energy updates that fell back to first order.
     pub energy_fallbacks: usize,
+    /// Decomposition figures over all ranks.
+    pub domain: DomainStepStats,
 }
 
-/// The single-node hydro pipeline with its reusable buffers.
+/// The hydro pipeline of one rank with its reusable buffers. The domain
+/// decomposition (`C` the communicator) is the only difference between a
+/// serial and a distributed run: every rank runs the same stages on its
+/// halos + owned particles.
 #[derive(Debug)]
-pub struct Hydro<K: Kernel> {
+pub struct Hydro<K: Kernel, C: Communicator = SerialComm> {
     kernel: K,
     config: HydroConfig,
+    domain: Domain<C>,
     tree: Octree,
     list: CompactNeighborList,
     factors: PairFactors,
-    keys: Vec<u64>,
-    perm: Vec<u32>,
-    sorter: KeySorter,
-    scratch: Vec<u64>,
+    h_before: Vec<f64>,
     step: u64,
     t: f64,
     dt_prev: f64,
@@ -119,10 +143,25 @@ pub struct Hydro<K: Kernel> {
 }
 
 impl<K: Kernel> Hydro<K> {
-    /// A pipeline at time `t0`, whose previous step is taken as `dt0` (the
-    /// first step is at most `max_growth * dt0`). Initial conditions must
-    /// have `dx = v dt0` and `du_prev = du` (see [`Hydro::prepare`]).
+    /// A serial pipeline at time `t0`, whose previous step is taken as `dt0`
+    /// (the first step is at most `max_growth * dt0`). Initial conditions
+    /// must have `dx = v dt0` (see [`Hydro::prepare`]).
     pub fn new(kernel: K, config: HydroConfig, t0: f64, dt0: f64) -> Result<Self, CoreError> {
+        Self::with_comm(kernel, config, t0, dt0, SerialComm::new(), DomainConfig::default())
+    }
+}
+
+impl<K: Kernel, C: Communicator> Hydro<K, C> {
+    /// A pipeline on one rank of `comm`; each rank passes the particles it
+    /// starts with (any split: the first step migrates them to their owners).
+    pub fn with_comm(
+        kernel: K,
+        config: HydroConfig,
+        t0: f64,
+        dt0: f64,
+        comm: C,
+        domain: DomainConfig,
+    ) -> Result<Self, CoreError> {
         config.eos.validate()?;
         if !(dt0 > 0.0 && dt0.is_finite()) {
             return Err(CoreError::Invalid(format!(
@@ -132,16 +171,21 @@ impl<K: Kernel> Hydro<K> {
         if config.bucket == 0 {
             return Err(CoreError::Invalid("bucket size must be at least 1".into()));
         }
+        let domain = Domain::new(
+            comm,
+            DomainConfig {
+                curve: config.curve,
+                ..domain
+            },
+        )?;
         Ok(Self {
             kernel,
             config,
+            domain,
             tree: Octree::default(),
             list: CompactNeighborList::new(),
             factors: PairFactors::default(),
-            keys: Vec::new(),
-            perm: Vec::new(),
-            sorter: KeySorter::new(),
-            scratch: Vec::new(),
+            h_before: Vec::new(),
             step: 0,
             t: t0,
             dt_prev: dt0,
@@ -185,6 +229,22 @@ impl<K: Kernel> Hydro<K> {
         self.dt_prev
     }
 
+    /// Range of this rank's own particles in the local arrays (the rest are
+    /// halos, copies of other ranks' particles).
+    pub fn owned(&self) -> Range<usize> {
+        self.domain.owned()
+    }
+
+    /// The domain decomposition.
+    pub fn domain(&self) -> &Domain<C> {
+        &self.domain
+    }
+
+    /// Figures of the last domain sync (particles, halos, bytes, seconds).
+    pub fn sync_stats(&self) -> SyncStats {
+        self.domain.stats()
+    }
+
     /// The neighbour lists of the last step.
     pub fn neighbor_list(&self) -> &CompactNeighborList {
         &self.list
@@ -195,21 +255,19 @@ impl<K: Kernel> Hydro<K> {
     pub fn buffer_bytes(&self) -> usize {
         self.list.bytes()
             + self.factors.bytes()
-            + self.keys.capacity() * 8
-            + self.perm.capacity() * 4
-            + self.scratch.capacity() * 8
+            + self.domain.keys().len() * 8 * 3
+            + self.h_before.capacity() * 8
             + self.tree.num_nodes() * 90
     }
 
     /// Advances `p` by one step. Open axes of `bbox` are refitted to the
-    /// particles first; periodic axes stay.
+    /// particles first (of all ranks); periodic axes stay.
     pub fn step(
         &mut self,
         p: &mut Particles,
         bbox: &mut BoundingBox,
     ) -> Result<StepReport, CoreError> {
         let step = self.step + 1;
-        let n = p.len();
         let mut times = StageTimes::default();
         let mut clock = Instant::now();
         let mut lap = |k: usize, times: &mut StageTimes| {
@@ -218,26 +276,27 @@ impl<K: Kernel> Hydro<K> {
             clock = now;
         };
 
-        self.sort(p, bbox)?;
+        let owned = self.domain.sync(p, bbox)?;
         lap(0, &mut times);
         self.tree
-            .rebuild(&self.keys, &p.x, &p.y, &p.z, self.config.bucket)?;
+            .rebuild(self.domain.keys(), &p.x, &p.y, &p.z, self.config.bucket)?;
         lap(1, &mut times);
-        let stats = self.search(p, bbox, step)?;
+        let local_stats = self.search(p, bbox, step, owned.clone())?;
         lap(2, &mut times);
         self.density(p, bbox);
         lap(3, &mut times);
-        self.eos(p)?;
+        self.eos(p, owned.clone())?;
+        self.exchange_thermo(p)?;
         lap(4, &mut times);
 
-        let pos = Positions {
-            x: &p.x,
-            y: &p.y,
-            z: &p.z,
-            h: &p.h,
-            m: &p.m,
-        };
         if self.config.gradients == Gradients::Iad {
+            let pos = Positions {
+                x: &p.x,
+                y: &p.y,
+                z: &p.z,
+                h: &p.h,
+                m: &p.m,
+            };
             if let Err(s) = iad(&self.kernel, bbox, pos, &p.rho, &self.list, &mut p.iad) {
                 return Err(CoreError::SingularIad {
                     step,
@@ -246,9 +305,19 @@ impl<K: Kernel> Hydro<K> {
                     neighbors: self.list.count(s.index),
                 });
             }
+            let [c0, c1, c2, c3, c4, c5] = &mut p.iad;
+            self.domain
+                .exchange(&mut [c0, c1, c2, c3, c4, c5].map(|c| c.as_mut_slice()))?;
         }
         lap(5, &mut times);
 
+        let pos = Positions {
+            x: &p.x,
+            y: &p.y,
+            z: &p.z,
+            h: &p.h,
+            m: &p.m,
+        };
         let iad_ref: [&[f64]; 6] = std::array::from_fn(|k| p.iad[k].as_slice());
         let state = HydroState {
             pos,
@@ -280,22 +349,82 @@ impl<K: Kernel> Hydro<K> {
         );
         if step == 1 {
             // Adams-Bashforth needs du_{n-1}; the first step uses du_0.
-            p.du_prev.copy_from_slice(&p.du);
+            p.du_prev[owned.clone()].copy_from_slice(&p.du[owned.clone()]);
         }
         lap(6, &mut times);
 
-        let conserved = Conserved::compute(p, n);
+        // One global sum: conserved quantities, neighbour and domain totals.
+        let sync = self.domain.stats();
+        let (conserved, [nc_total, over_cap, halos_total, bytes_sent]) = Conserved::compute(
+            p,
+            owned.clone(),
+            [
+                local_stats.total as f64,
+                local_stats.over_cap as f64,
+                sync.halos as f64,
+                sync.bytes_sent as f64,
+            ],
+            self.domain.comm(),
+        );
         lap(7, &mut times);
 
+        // One global minimum: time-step criteria, neighbour and domain
+        // extremes (maxima as minima of negatives).
+        let mut mins = [
+            mstats.min_h_over_vsig,
+            -mstats.max_abs_div_v,
+            local_stats.min_count as f64,
+            -(local_stats.max_count as f64),
+            sync.owned as f64,
+            -(sync.owned as f64),
+            -(sync.halos as f64 / sync.owned.max(1) as f64),
+            -sync.comm_seconds,
+            -sync.sync_seconds,
+        ];
+        if owned.is_empty() {
+            mins[2] = f64::INFINITY;
+            mins[3] = f64::INFINITY;
+        }
+        self.domain.comm().all_reduce(&mut mins, ReduceOp::Min);
+        let global = MomentumStats {
+            min_h_over_vsig: mins[0],
+            max_abs_div_v: -mins[1],
+        };
+        let neighbors = NeighborStats {
+            min_count: mins[2] as usize,
+            max_count: (-mins[3]) as usize,
+            total: nc_total as usize,
+            over_cap: over_cap as usize,
+            // A local index: only meaningful on this rank.
+            first_over_cap: local_stats.first_over_cap,
+        };
+        let domain = DomainStepStats {
+            owned_min: mins[4] as usize,
+            owned_max: (-mins[5]) as usize,
+            halos_total: halos_total as usize,
+            halo_ratio_max: -mins[6],
+            bytes_sent: bytes_sent as u64,
+            comm_seconds_max: -mins[7],
+            sync_seconds_max: -mins[8],
+        };
         let dt = self
             .config
             .timestep
-            .dt(&mstats, self.dt_prev)
+            .dt(&global, self.dt_prev)
             .min(self.dt_cap);
         self.dt_cap = f64::INFINITY;
         let h_update = self.config.neighbors.h_update(self.config.h_update);
         let guard = self.config.eos.uses_internal_energy();
-        let report = integrate(p, bbox, dt, self.dt_prev, Some(h_update), guard, step)?;
+        let report = integrate(
+            p,
+            owned,
+            bbox,
+            dt,
+            self.dt_prev,
+            Some(h_update),
+            guard,
+            step,
+        )?;
         lap(8, &mut times);
 
         let t = self.t;
@@ -307,65 +436,82 @@ impl<K: Kernel> Hydro<K> {
             t,
             dt,
             conserved,
-            neighbors: stats,
+            neighbors,
             times,
             energy_fallbacks: report.energy_fallbacks,
+            domain,
         })
     }
 }
 
-impl<K: Kernel> Hydro<K> {
+impl<K: Kernel, C: Communicator> Hydro<K, C> {
     /// Recomputes neighbours, density and pressure at the current positions
-    /// without advancing (for observables at the end of a run).
+    /// without advancing (for observables at the end of a run). Afterwards
+    /// the local arrays hold halos again: use [`owned`](Self::owned).
     pub fn evaluate_density(
         &mut self,
         p: &mut Particles,
         bbox: &mut BoundingBox,
     ) -> Result<(), CoreError> {
-        self.sort(p, bbox)?;
+        let owned = self.domain.sync(p, bbox)?;
         self.tree
-            .rebuild(&self.keys, &p.x, &p.y, &p.z, self.config.bucket)?;
-        self.search(p, bbox, self.step)?;
+            .rebuild(self.domain.keys(), &p.x, &p.y, &p.z, self.config.bucket)?;
+        self.search(p, bbox, self.step, owned.clone())?;
         self.density(p, bbox);
-        self.eos(p)
+        self.eos(p, owned)?;
+        self.exchange_thermo(p)
     }
 
-    /// Refits open axes, computes keys and puts the particles in curve order.
-    fn sort(&mut self, p: &mut Particles, bbox: &mut BoundingBox) -> Result<(), CoreError> {
-        refit_open_axes(bbox, p)?;
-        compute_keys(bbox, self.config.curve, &p.x, &p.y, &p.z, &mut self.keys);
-        self.sorter.sort(&self.keys, Some(&p.id), &mut self.perm);
-        p.reorder(&self.perm, &mut self.scratch);
-        sph_tree::apply_permutation(&self.perm, &mut self.keys, &mut self.scratch);
-        Ok(())
-    }
-
-    /// Neighbour lists of every particle, with the h iteration.
+    /// Neighbour lists of the owned particles, with the h iteration. Counts
+    /// are one-sided (`r < 2 h_i`), so each particle's iteration is its own
+    /// business; the lists are symmetric (`r < 2 max(h_i, h_j)`), so once
+    /// the halos' final h are known the lists are rebuilt if any changed.
     fn search(
         &mut self,
         p: &mut Particles,
         bbox: &BoundingBox,
         step: u64,
+        owned: Range<usize>,
     ) -> Result<NeighborStats, CoreError> {
-        let n = p.len();
-        find_neighbors(
-            &self.config.neighbors,
-            self.config.h_update,
-            &self.tree,
-            bbox,
-            &p.x,
-            &p.y,
-            &p.z,
-            &mut p.h,
-            &p.id,
-            0..n,
-            &mut self.list,
-            &mut p.nc,
-            step,
-        )
+        let h_limit = self.domain.h_limit();
+        let run = |p: &mut Particles, list: &mut CompactNeighborList| {
+            find_neighbors(
+                &self.config.neighbors,
+                self.config.h_update,
+                &self.tree,
+                bbox,
+                &p.x,
+                &p.y,
+                &p.z,
+                &mut p.h,
+                &p.id,
+                owned.clone(),
+                h_limit,
+                list,
+                &mut p.nc,
+                step,
+            )
+        };
+        let stats = run(p, &mut self.list)?;
+        if self.domain.comm().size() == 1 {
+            return Ok(stats);
+        }
+        self.h_before.clear();
+        self.h_before.extend_from_slice(&p.h);
+        self.domain.exchange(&mut [p.h.as_mut_slice()])?;
+        let changed = self
+            .h_before
+            .iter()
+            .zip(&p.h)
+            .any(|(a, b)| a.to_bits() != b.to_bits());
+        // Every rank's lists must see every particle's final h.
+        if changed {
+            return run(p, &mut self.list);
+        }
+        Ok(stats)
     }
 
-    /// Density and grad-h factor.
+    /// Density and grad-h factor of the owned particles.
     fn density(&self, p: &mut Particles, bbox: &BoundingBox) {
         let pos = Positions {
             x: &p.x,
@@ -384,10 +530,23 @@ impl<K: Kernel> Hydro<K> {
         );
     }
 
-    /// Pressure and sound speed; an EOS with a per-particle reference state
-    /// calibrates reference densities left at zero to the current density.
-    fn eos(&self, p: &mut Particles) -> Result<(), CoreError> {
+    /// Sends the owners' density, pressure, sound speed (and Omega) to the
+    /// halos.
+    fn exchange_thermo(&mut self, p: &mut Particles) -> Result<(), CoreError> {
+        let mut fields: Vec<&mut [f64]> = vec![&mut p.rho, &mut p.p, &mut p.c];
+        if !p.omega.is_empty() {
+            fields.push(&mut p.omega);
+        }
+        self.domain.exchange(&mut fields)?;
+        Ok(())
+    }
+
+    /// Pressure and sound speed of the owned particles; an EOS with a
+    /// per-particle reference state calibrates reference densities left at
+    /// zero to the current density.
+    fn eos(&self, p: &mut Particles, owned: Range<usize>) -> Result<(), CoreError> {
         let n = p.len();
+        let r = owned;
         let reference = if self.config.eos.needs_reference() {
             if p.eos_ref[0].len() != n || p.eos_ref[1].len() != n {
                 return Err(CoreError::Invalid(format!(
@@ -395,37 +554,22 @@ impl<K: Kernel> Hydro<K> {
                     self.config.eos
                 )));
             }
-            for i in 0..n {
+            for i in r.clone() {
                 if p.eos_ref[0][i] == 0.0 {
                     p.eos_ref[0][i] = p.rho[i];
                 }
             }
-            Some((p.eos_ref[0].as_slice(), p.eos_ref[1].as_slice()))
+            Some((&p.eos_ref[0][r.clone()], &p.eos_ref[1][r.clone()]))
         } else {
             None
         };
-        self.config
-            .eos
-            .apply(&p.rho, &p.u, reference, &mut p.p, &mut p.c);
+        self.config.eos.apply(
+            &p.rho[r.clone()],
+            &p.u[r.clone()],
+            reference,
+            &mut p.p[r.clone()],
+            &mut p.c[r],
+        );
         Ok(())
     }
-}
-
-/// Refits the open axes of `bbox` to the particles (periodic axes keep
-/// their bounds).
-pub fn refit_open_axes(bbox: &mut BoundingBox, p: &Particles) -> Result<(), CoreError> {
-    let b = bbox.boundary();
-    if b.iter().all(|&k| k == Boundary::Periodic) || p.is_empty() {
-        return Ok(());
-    }
-    let fit = BoundingBox::enclosing(&p.x, &p.y, &p.z)?;
-    let (mut lo, mut hi) = (bbox.lo(), bbox.hi());
-    for k in 0..3 {
-        if b[k] == Boundary::Open {
-            lo[k] = fit.lo()[k];
-            hi[k] = fit.hi()[k];
-        }
-    }
-    *bbox = BoundingBox::new(lo, hi, b)?;
-    Ok(())
 }

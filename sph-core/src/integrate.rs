@@ -10,6 +10,7 @@
 
 use crate::{CoreError, Particles};
 use rayon::prelude::*;
+use std::ops::Range;
 use sph_tree::BoundingBox;
 
 /// Smoothing-length update `h <- h * 0.5 * (1 + c ng0 / nc)^(1/p)`, whose
@@ -60,13 +61,14 @@ pub struct IntegrateReport {
     pub energy_fallbacks: usize,
 }
 
-/// Advances every particle by `dt` (the previous step was `dt_prev`), wraps
+/// Advances the particles of `range` by `dt` (the previous step was `dt_prev`), wraps
 /// positions into periodic boxes and updates h (when `h_update` is given)
 /// from the neighbour counts `p.nc`. With `energy_guard`, a negative
 /// internal energy falls back to first order and then is an error (set it
 /// when pressure depends on u).
 pub fn integrate(
     p: &mut Particles,
+    range: Range<usize>,
     bbox: &BoundingBox,
     dt: f64,
     dt_prev: f64,
@@ -77,22 +79,23 @@ pub fn integrate(
     let (ax, ay, az, du, nc, id) = (&p.ax, &p.ay, &p.az, &p.du, &p.nc, &p.id);
     let half_prev = 0.5 * dt_prev;
     let result: Result<usize, CoreError> = (
-        p.x.par_iter_mut(),
-        p.y.par_iter_mut(),
-        p.z.par_iter_mut(),
-        p.vx.par_iter_mut(),
-        p.vy.par_iter_mut(),
-        p.vz.par_iter_mut(),
-        p.dx.par_iter_mut(),
-        p.dy.par_iter_mut(),
-        p.dz.par_iter_mut(),
-        p.u.par_iter_mut(),
-        p.du_prev.par_iter_mut(),
-        p.h.par_iter_mut(),
+        p.x[range.clone()].par_iter_mut(),
+        p.y[range.clone()].par_iter_mut(),
+        p.z[range.clone()].par_iter_mut(),
+        p.vx[range.clone()].par_iter_mut(),
+        p.vy[range.clone()].par_iter_mut(),
+        p.vz[range.clone()].par_iter_mut(),
+        p.dx[range.clone()].par_iter_mut(),
+        p.dy[range.clone()].par_iter_mut(),
+        p.dz[range.clone()].par_iter_mut(),
+        p.u[range.clone()].par_iter_mut(),
+        p.du_prev[range.clone()].par_iter_mut(),
+        p.h[range.clone()].par_iter_mut(),
     )
         .into_par_iter()
         .enumerate()
-        .map(|(i, (x, y, z, vx, vy, vz, dx, dy, dz, u, du_prev, h))| {
+        .map(|(k, (x, y, z, vx, vy, vz, dx, dy, dz, u, du_prev, h))| {
+            let i = range.start + k;
             let a = [ax[i], ay[i], az[i]];
             let pos = [x, y, z];
             let vel = [vx, vy, vz];

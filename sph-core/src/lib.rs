@@ -66,7 +66,7 @@ pub mod timestep;
 pub use conserved::Conserved;
 pub use eos::Eos;
 pub use error::CoreError;
-pub use hydro::{Hydro, HydroConfig, StageTimes, StepReport, STAGES};
+pub use hydro::{DomainStepStats, Hydro, HydroConfig, StageTimes, StepReport, STAGES};
 pub use integrate::HUpdate;
 pub use momentum::Gradients;
 pub use neighbors::NeighborParams;

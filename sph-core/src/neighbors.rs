@@ -45,8 +45,9 @@ impl NeighborParams {
 }
 
 /// Builds the neighbour lists of `targets`, iterating h of the particles
-/// whose count is out of range. Writes the final counts into `nc` (indexed
-/// like the particles).
+/// whose count is out of range; h never grows beyond `h_limit` (what the
+/// halos of a distributed run cover). Writes the final counts into `nc`
+/// (indexed like the particles).
 #[allow(clippy::too_many_arguments)]
 pub fn find_neighbors(
     params: &NeighborParams,
@@ -59,6 +60,7 @@ pub fn find_neighbors(
     h: &mut [f64],
     ids: &[u64],
     targets: Range<usize>,
+    h_limit: f64,
     list: &mut CompactNeighborList,
     nc: &mut [u32],
     step: u64,
@@ -101,7 +103,7 @@ pub fn find_neighbors(
         let hmax = (0..3)
             .filter(|&k| bbox.is_periodic(k))
             .map(|k| 0.249 * lengths[k])
-            .fold(f64::INFINITY, f64::min);
+            .fold(h_limit, f64::min);
         for i in targets.clone() {
             let c = list.count(i);
             if params.out_of_range(c) {

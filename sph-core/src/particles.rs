@@ -5,7 +5,9 @@
 //! empty when grad-h terms are off. Arrays are kept in space-filling-curve
 //! order by [`Particles::reorder`].
 
+use sph_domain::ParticleFields;
 use sph_tree::{apply_permutation, apply_permutation_f64};
+use std::ops::Range;
 
 /// Which optional fields a run needs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -174,6 +176,17 @@ impl Particles {
         v
     }
 
+    /// The fields that carry state from one step to the next (everything
+    /// else is recomputed each step): what migration and halos move.
+    fn persistent(&self) -> Vec<&Vec<f64>> {
+        let mut v = vec![
+            &self.x, &self.y, &self.z, &self.vx, &self.vy, &self.vz, &self.dx, &self.dy,
+            &self.dz, &self.h, &self.m, &self.u, &self.du_prev,
+        ];
+        v.extend(self.eos_ref.iter().filter(|f| !f.is_empty()));
+        v
+    }
+
     /// Bytes held per particle by the particle arrays (not counting
     /// neighbour lists or the tree).
     pub fn bytes_per_particle(&self) -> usize {
@@ -199,6 +212,21 @@ impl Particles {
         self.nc.resize(perm.len(), 0);
     }
 
+    /// Keeps only the particles in `range`, in order.
+    pub fn keep(&mut self, range: Range<usize>) {
+        let cut = |v: &mut Vec<f64>| {
+            v.truncate(range.end);
+            v.drain(..range.start);
+        };
+        for f in self.f64_fields_mut() {
+            cut(f);
+        }
+        self.id.truncate(range.end);
+        self.id.drain(..range.start);
+        self.nc.truncate(range.end);
+        self.nc.drain(..range.start.min(self.nc.len()));
+    }
+
     /// Checks that every array has the same length.
     pub fn check(&self) -> Result<(), crate::CoreError> {
         let n = self.len();
@@ -221,5 +249,75 @@ impl Particles {
             }
         }
         Ok(())
+    }
+}
+
+impl ParticleFields for Particles {
+    fn len(&self) -> usize {
+        self.x.len()
+    }
+
+    fn ids(&self) -> &[u64] {
+        &self.id
+    }
+
+    fn positions(&self) -> [&[f64]; 3] {
+        [&self.x, &self.y, &self.z]
+    }
+
+    fn smoothing_lengths(&self) -> &[f64] {
+        &self.h
+    }
+
+    fn packed_words(&self) -> usize {
+        1 + self.persistent().len()
+    }
+
+    fn pack(&self, i: usize, out: &mut Vec<u64>) {
+        out.push(self.id[i]);
+        out.extend(self.persistent().iter().map(|f| f[i].to_bits()));
+    }
+
+    fn push_packed(&mut self, words: &[u64]) {
+        let with_ref = !self.eos_ref[0].is_empty();
+        self.id.push(words[0]);
+        let mut w = words[1..].iter().map(|&b| f64::from_bits(b));
+        let mut next = || w.next().expect("packed particle too short");
+        for f in [
+            &mut self.x, &mut self.y, &mut self.z, &mut self.vx, &mut self.vy, &mut self.vz,
+            &mut self.dx, &mut self.dy, &mut self.dz, &mut self.h, &mut self.m, &mut self.u,
+            &mut self.du_prev,
+        ] {
+            f.push(next());
+        }
+        if with_ref {
+            for f in self.eos_ref.iter_mut() {
+                f.push(next());
+            }
+        }
+        // Recomputed every step before use.
+        for f in [
+            &mut self.rho, &mut self.p, &mut self.c, &mut self.ax, &mut self.ay, &mut self.az,
+            &mut self.du,
+        ] {
+            f.push(0.0);
+        }
+        if self.fields.grad_h {
+            self.omega.push(1.0);
+        }
+        if self.fields.iad {
+            for f in self.iad.iter_mut() {
+                f.push(0.0);
+            }
+        }
+        self.nc.push(0);
+    }
+
+    fn keep(&mut self, range: Range<usize>) {
+        Particles::keep(self, range);
+    }
+
+    fn reorder(&mut self, perm: &[u32], scratch: &mut Vec<u64>) {
+        Particles::reorder(self, perm, scratch);
     }
 }

@@ -345,14 +345,14 @@ fn integrator_is_time_reversible() {
     // Forward: dt_prev = dt throughout.
     for s in 0..200 {
         forces(&mut p);
-        integrate(&mut p, &bbox, dt, dt, None, true, s).unwrap();
+        integrate(&mut p, 0..n, &bbox, dt, dt, None, true, s).unwrap();
     }
     // Backward: the first reverse step still has dt_prev = +dt.
     forces(&mut p);
-    integrate(&mut p, &bbox, -dt, dt, None, true, 200).unwrap();
+    integrate(&mut p, 0..n, &bbox, -dt, dt, None, true, 200).unwrap();
     for s in 1..200 {
         forces(&mut p);
-        integrate(&mut p, &bbox, -dt, -dt, None, true, 200 + s).unwrap();
+        integrate(&mut p, 0..n, &bbox, -dt, -dt, None, true, 200 + s).unwrap();
     }
     let mut worst: f64 = 0.0;
     for i in 0..n {
