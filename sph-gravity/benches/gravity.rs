@@ -1,0 +1,61 @@
+//! Tree gravity on Plummer spheres (1e5 and 1e6 particles, theta 0.5,
+//! quadrupoles) and the direct sum on 1e4 particles for comparison.
+//! The interaction counts of each tree evaluation are printed once.
+
+#[path = "../tests/common/mod.rs"]
+mod common;
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use sph_gravity::{direct, GravityField, GravityParams, TreeGravity};
+use std::time::{Duration, Instant};
+
+fn tree_gravity(c: &mut Criterion) {
+    let mut group = c.benchmark_group("tree_gravity_plummer_theta0.5");
+    group.sample_size(10);
+    for n in [100_000usize, 1_000_000] {
+        let cloud = common::plummer(n, 10.0, 42);
+        let mut solver = TreeGravity::new(GravityParams::default()).unwrap();
+        let mut out = GravityField::new();
+        // One untimed evaluation: counts, and the buffers get their capacity.
+        let t = Instant::now();
+        let st = solver
+            .compute_unsorted(&cloud.x, &cloud.y, &cloud.z, &cloud.m, None, &mut out)
+            .unwrap();
+        let dt = t.elapsed().as_secs_f64();
+        let total = (st.p2p + st.m2p) as f64;
+        println!(
+            "n = {n}: {:.0} interactions/particle (p2p {:.0}, m2p {:.0}), {} groups; \
+             first evaluation {dt:.3} s = {:.3e} interactions/s",
+            st.interactions_per_particle(),
+            st.p2p_per_particle(),
+            st.m2p_per_particle(),
+            st.groups,
+            total / dt,
+        );
+        group.measurement_time(Duration::from_secs(if n > 100_000 { 20 } else { 10 }));
+        group.bench_with_input(BenchmarkId::from_parameter(n), &cloud, |b, cl| {
+            b.iter(|| {
+                solver
+                    .compute_unsorted(&cl.x, &cl.y, &cl.z, &cl.m, None, &mut out)
+                    .unwrap()
+            })
+        });
+    }
+    group.finish();
+}
+
+fn direct_sum(c: &mut Criterion) {
+    let mut group = c.benchmark_group("direct_sum_plummer");
+    group.sample_size(10);
+    let n = 10_000usize;
+    let cloud = common::plummer(n, 10.0, 42);
+    let mut out = GravityField::new();
+    println!("direct n = {n}: {} interactions/particle", n - 1);
+    group.bench_with_input(BenchmarkId::from_parameter(n), &cloud, |b, cl| {
+        b.iter(|| direct::direct_sum(&cl.x, &cl.y, &cl.z, &cl.m, None, 1.0, &mut out).unwrap())
+    });
+    group.finish();
+}
+
+criterion_group!(benches, tree_gravity, direct_sum);
+criterion_main!(benches);
