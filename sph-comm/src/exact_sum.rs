@@ -98,12 +98,21 @@ impl ExactSum {
     /// Adds one value exactly.
     #[inline]
     pub fn add(&mut self, x: f64) {
+        self.add_raw(x);
+        self.pending += 1;
+        if self.pending >= MAX_PENDING {
+            self.normalize();
+        }
+    }
+
+    /// Adds `x` to the limbs without counting it in `pending`.
+    #[inline(always)]
+    fn add_raw(&mut self, x: f64) {
         let bits = x.to_bits();
         let exp = ((bits >> 52) & 0x7ff) as u32;
         let frac = bits & ((1 << 52) - 1);
-        let negative = (bits >> 63) != 0;
         if exp == 0x7ff {
-            self.add_special(frac, negative);
+            self.add_special(frac, (bits >> 63) != 0);
             return;
         }
         // value = mant * 2^(index - 1074)
@@ -114,6 +123,8 @@ impl ExactSum {
         };
         let k = (index / 32) as usize;
         let wide = u128::from(mant) << (index % 32);
+        // Branch-free conditional negation: m is 0 or -1 (all ones).
+        let m = -((bits >> 63) as i64);
         let parts = [
             (wide as i64) & MASK,
             ((wide >> 32) as i64) & MASK,
@@ -121,18 +132,8 @@ impl ExactSum {
         ];
         // index <= 2045, so k + 2 <= 65 < LIMBS.
         let dst = &mut self.limbs[k..k + 3];
-        if negative {
-            for (d, p) in dst.iter_mut().zip(parts) {
-                *d -= p;
-            }
-        } else {
-            for (d, p) in dst.iter_mut().zip(parts) {
-                *d += p;
-            }
-        }
-        self.pending += 1;
-        if self.pending >= MAX_PENDING {
-            self.normalize();
+        for (d, p) in dst.iter_mut().zip(parts) {
+            *d += (p ^ m) - m;
         }
     }
 
