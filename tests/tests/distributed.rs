@@ -1,0 +1,285 @@
+//! Rank-count independence (built only with `--features mpi`; run by
+//! `cargo test -p sph-validation --features mpi --test distributed`).
+//!
+//! Without arguments this binary is the launcher: for every case it runs
+//! itself as a child once serially with 1 thread (the reference), serially
+//! with 2 threads, and under `mpirun -n 2` and `-n 4` with 1 thread per
+//! rank, each child writing `conserved.csv` and `particles.csv` (the full
+//! final state sorted by id, every value in exact round-trip decimals).
+//! Every run must give byte-identical files. The `drift` case moves a
+//! uniform gas across the periodic boundaries so that particles migrate
+//! between ranks every few steps: no particle may be lost or duplicated,
+//! and mass, momentum and energy must be conserved.
+
+use sph_apps::cases::{self, Scene};
+use sph_apps::simulation::{Progress, Stop};
+use sph_apps::Simulation;
+use sph_comm::{Communicator, MpiComm, SerialComm};
+use sph_core::HydroConfig;
+use sph_kernels::{KernelChoice, Tabulated};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// (case, particles per side, steps)
+const CASES: [(&str, usize, u64); 4] = [
+    ("sedov", 24, 20),
+    ("square-patch", 20, 20),
+    ("noh", 20, 20),
+    ("drift", 16, 30),
+];
+const TIMEOUT: Duration = Duration::from_secs(600);
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    if let Some(i) = args.iter().position(|a| a == "--child") {
+        let (mode, case, out, threads) = (&args[i + 1], &args[i + 2], &args[i + 3], &args[i + 4]);
+        child(
+            mode,
+            case,
+            Path::new(out),
+            threads.parse().expect("threads"),
+        );
+    } else {
+        launcher();
+    }
+}
+
+fn scene(case: &str) -> Scene {
+    let (_, side, _) = CASES.iter().find(|c| c.0 == case).expect("known case");
+    let config = HydroConfig::default();
+    match case {
+        "sedov" => cases::sedov::setup(*side, config).unwrap(),
+        "square-patch" => cases::square_patch::setup(*side, config).unwrap(),
+        "noh" => cases::noh::setup(*side, config).unwrap(),
+        "drift" => {
+            // Uniform warm gas moving as a whole through the periodic box.
+            let mut s = cases::sedov::setup(*side, config).unwrap();
+            let p = &mut s.particles;
+            for i in 0..p.len() {
+                (p.vx[i], p.vy[i], p.vz[i]) = (3.0, -2.0, 1.0);
+                p.u[i] = 1.0;
+            }
+            s.dt0 = 2e-3;
+            s.reference = None;
+            s
+        }
+        _ => unreachable!(),
+    }
+}
+
+fn child(mode: &str, case: &str, out: &Path, threads: usize) {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build_global()
+        .expect("thread pool");
+    let steps = CASES.iter().find(|c| c.0 == case).expect("case").2;
+    let kernel: Tabulated = KernelChoice::default()
+        .tabulate(Tabulated::DEFAULT_POINTS)
+        .expect("kernel");
+    let name = KernelChoice::default().to_string();
+    let mut rank = 0;
+    let summary = if mode == "mpi" {
+        let comm = MpiComm::init().expect("MPI");
+        rank = comm.rank();
+        let mut sim = Simulation::with_comm(scene(case), kernel, name, comm).expect("set-up");
+        sim.set_write_particles(true);
+        sim.run(Stop::Steps(steps), out, Progress::Quiet)
+    } else {
+        let mut sim =
+            Simulation::with_comm(scene(case), kernel, name, SerialComm::new()).expect("set-up");
+        sim.set_write_particles(true);
+        sim.run(Stop::Steps(steps), out, Progress::Quiet)
+    };
+    match summary {
+        Ok(_) if rank > 0 => {}
+        Ok(s) => println!(
+            "ranks {} halo ratio {:.3} owned {}..{}",
+            s.ranks, s.domain.halo_ratio_mean, s.domain.owned_min, s.domain.owned_max
+        ),
+        Err(e) => {
+            eprintln!("run failed: {e}");
+            std::process::exit(1);
+        }
+    }
+}
+
+fn launcher() {
+    let exe = std::env::current_exe().expect("own path");
+    let version = Command::new("mpirun")
+        .arg("--version")
+        .output()
+        .expect("mpirun not found: install an MPI (e.g. Debian's openmpi-bin)");
+    let text = String::from_utf8_lossy(&version.stdout).to_string()
+        + &String::from_utf8_lossy(&version.stderr);
+    let open_mpi = text.contains("Open MPI") || text.contains("OpenRTE");
+    let root = std::env::temp_dir().join(format!("sph-distributed-{}", std::process::id()));
+    let mut failures = Vec::new();
+    for (case, side, steps) in CASES {
+        // (label, ranks, threads)
+        let runs = [
+            ("serial-1t", 0, 1),
+            ("serial-2t", 0, 2),
+            ("mpi-2", 2, 1),
+            ("mpi-4", 4, 1),
+        ];
+        let mut dirs: Vec<(String, PathBuf)> = Vec::new();
+        for (label, ranks, threads) in runs {
+            let dir = root.join(case).join(label);
+            let mut cmd = if ranks == 0 {
+                let mut c = Command::new(&exe);
+                c.args(["--child", "serial", case]);
+                c
+            } else {
+                let mut c = Command::new("mpirun");
+                c.arg("-n").arg(ranks.to_string());
+                if open_mpi {
+                    c.args(["--oversubscribe", "--allow-run-as-root"]);
+                    c.env("OMPI_MCA_btl_vader_single_copy_mechanism", "none");
+                }
+                c.arg(&exe).args(["--child", "mpi", case]);
+                c
+            };
+            cmd.arg(&dir).arg(threads.to_string());
+            cmd.stdout(Stdio::piped()).stderr(Stdio::piped());
+            let start = Instant::now();
+            let (out, err, ok) = wait_with_timeout(cmd.spawn().expect("spawn"), TIMEOUT);
+            let out = String::from_utf8_lossy(&out);
+            println!(
+                "{case} {side}^3 {steps} steps {label}: {} in {:.1} s: {}",
+                if ok { "ok" } else { "FAILED" },
+                start.elapsed().as_secs_f64(),
+                out.trim()
+            );
+            if !ok {
+                println!("--- stderr ---\n{}", String::from_utf8_lossy(&err));
+                failures.push(format!("{case} {label}: run failed"));
+                continue;
+            }
+            dirs.push((label.to_string(), dir));
+        }
+        let Some((_, reference)) = dirs.first() else {
+            continue;
+        };
+        for file in ["conserved.csv", "particles.csv"] {
+            let want = std::fs::read(reference.join(file)).expect("reference output");
+            for (label, dir) in &dirs[1..] {
+                let got = std::fs::read(dir.join(file)).expect("output");
+                if got != want {
+                    failures.push(format!(
+                        "{case}: {file} of {label} differs from serial-1t{}",
+                        first_difference(&want, &got)
+                    ));
+                }
+            }
+        }
+        if case == "drift" {
+            if let Err(e) = check_migration(reference, side * side * side) {
+                failures.push(format!("drift: {e}"));
+            }
+        }
+    }
+    std::fs::remove_dir_all(&root).ok();
+    if failures.is_empty() {
+        println!("distributed: all runs bit-identical");
+    } else {
+        for f in &failures {
+            println!("FAILED: {f}");
+        }
+        std::process::exit(1);
+    }
+}
+
+/// Every particle id present once, mass exact, momentum and energy kept.
+fn check_migration(dir: &Path, n: usize) -> Result<(), String> {
+    let text = std::fs::read_to_string(dir.join("particles.csv")).map_err(|e| e.to_string())?;
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let ids: Vec<u64> = rows.iter().map(|r| r[0] as u64).collect();
+    if ids != (0..n as u64).collect::<Vec<_>>() {
+        return Err(format!(
+            "{} particles at the end, ids not 0..{n}",
+            ids.len()
+        ));
+    }
+    let mass: f64 = rows.iter().map(|r| r[8]).sum();
+    if (mass - 1.0).abs() > 1e-12 {
+        return Err(format!("total mass {mass}, expected 1"));
+    }
+    // The gas crossed the box: its mean displacement is at least a few spacings.
+    let cons = std::fs::read_to_string(dir.join("conserved.csv")).map_err(|e| e.to_string())?;
+    let rows: Vec<Vec<f64>> = cons
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let (first, last) = (&rows[0], &rows[rows.len() - 1]);
+    let travelled = 3.0 * last[1];
+    if travelled < 4.0 / 16.0 {
+        return Err(format!(
+            "gas moved only {travelled} in x: too little migration"
+        ));
+    }
+    for k in 6..9 {
+        let rel = (last[k] - first[k]).abs() / 3.0;
+        if rel > 1e-12 {
+            return Err(format!("momentum component {} changed by {rel:e}", k - 6));
+        }
+    }
+    let de = (last[5] - first[5]).abs() / first[5];
+    if de > 1e-6 {
+        return Err(format!("total energy changed by {de:e}"));
+    }
+    Ok(())
+}
+
+fn first_difference(a: &[u8], b: &[u8]) -> String {
+    let line = a
+        .split(|&c| c == b'\n')
+        .zip(b.split(|&c| c == b'\n'))
+        .position(|(x, y)| x != y);
+    match line {
+        Some(l) => format!(" (first at line {})", l + 1),
+        None => " (lengths differ)".into(),
+    }
+}
+
+fn wait_with_timeout(
+    mut child: std::process::Child,
+    timeout: Duration,
+) -> (Vec<u8>, Vec<u8>, bool) {
+    use std::io::Read;
+    let mut out = child.stdout.take().expect("stdout");
+    let mut err = child.stderr.take().expect("stderr");
+    let t_out = std::thread::spawn(move || {
+        let mut v = Vec::new();
+        out.read_to_end(&mut v).ok();
+        v
+    });
+    let t_err = std::thread::spawn(move || {
+        let mut v = Vec::new();
+        err.read_to_end(&mut v).ok();
+        v
+    });
+    let start = Instant::now();
+    let ok = loop {
+        match child.try_wait().expect("wait") {
+            Some(s) => break s.success(),
+            None if start.elapsed() > timeout => {
+                eprintln!("child timed out after {timeout:?}; killing it");
+                child.kill().ok();
+                child.wait().ok();
+                break false;
+            }
+            None => std::thread::sleep(Duration::from_millis(20)),
+        }
+    };
+    (
+        t_out.join().expect("stdout"),
+        t_err.join().expect("stderr"),
+        ok,
+    )
+}
