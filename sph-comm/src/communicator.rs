@@ -138,3 +138,42 @@ pub(crate) fn check_dests<S>(size: usize, sends: &[(usize, S)]) -> Result<(), Co
         None => Ok(()),
     }
 }
+
+/// A shared reference to a communicator is a communicator, so code can store
+/// `&C` where it expects `C: Communicator`.
+impl<C: Communicator> Communicator for &C {
+    fn rank(&self) -> usize {
+        (**self).rank()
+    }
+
+    fn size(&self) -> usize {
+        (**self).size()
+    }
+
+    fn barrier(&self) {
+        (**self).barrier()
+    }
+
+    fn all_reduce<T: Reducible>(&self, buf: &mut [T], op: ReduceOp) {
+        (**self).all_reduce(buf, op)
+    }
+
+    fn sparse_exchange<T: Plain, S: AsRef<[T]>>(
+        &self,
+        sends: &[(usize, S)],
+    ) -> Result<Received<T>, CommError> {
+        (**self).sparse_exchange(sends)
+    }
+
+    fn all_to_all_v<T: Plain>(
+        &self,
+        send: &[T],
+        send_counts: &[usize],
+    ) -> Result<Gathered<T>, CommError> {
+        (**self).all_to_all_v(send, send_counts)
+    }
+
+    fn all_gather_v<T: Plain>(&self, send: &[T]) -> Result<Gathered<T>, CommError> {
+        (**self).all_gather_v(send)
+    }
+}

@@ -95,6 +95,18 @@ fn argument_errors() {
 }
 
 #[test]
+fn references_are_communicators() {
+    fn total<C: Communicator>(c: C) -> u64 {
+        c.all_reduce_scalar(3u64, ReduceOp::Sum) + c.size() as u64
+    }
+    let comm = SerialComm::new();
+    let by_ref: &SerialComm = &comm;
+    let by_ref_ref: &&SerialComm = &by_ref;
+    assert_eq!(total(by_ref), 4);
+    assert_eq!(total(by_ref_ref), 4);
+}
+
+#[test]
 fn empty_exchange() {
     let comm = SerialComm::new();
     let sends: [(usize, Vec<f64>); 0] = [];
