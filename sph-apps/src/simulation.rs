@@ -477,8 +477,18 @@ fn write_particles(path: &Path, p: &Particles) -> Result<(), AppError> {
     for i in 0..p.len() {
         f.line(&format!(
             "{},{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?}",
-            p.id[i], p.x[i], p.y[i], p.z[i], p.vx[i], p.vy[i], p.vz[i], p.h[i], p.m[i], p.u[i],
-            p.rho[i], p.p[i]
+            p.id[i],
+            p.x[i],
+            p.y[i],
+            p.z[i],
+            p.vx[i],
+            p.vy[i],
+            p.vz[i],
+            p.h[i],
+            p.m[i],
+            p.u[i],
+            p.rho[i],
+            p.p[i]
         ))?;
     }
     f.flush()

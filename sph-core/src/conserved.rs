@@ -64,7 +64,7 @@ impl Conserved {
                 s
             })
             .reduce(
-                || Default::default(),
+                Default::default,
                 |mut a, b| {
                     for (x, y) in a.iter_mut().zip(b.iter()) {
                         x.merge(y);
@@ -74,7 +74,11 @@ impl Conserved {
             )
             .into_iter()
             .collect();
-        sums.extend(extra.iter().map(|&e| std::iter::once(e).collect::<ExactSum>()));
+        sums.extend(
+            extra
+                .iter()
+                .map(|&e| std::iter::once(e).collect::<ExactSum>()),
+        );
         ExactSum::all_reduce_many(&mut sums, comm);
         let v: Vec<f64> = sums.iter().map(ExactSum::value).collect();
         let c = Conserved {

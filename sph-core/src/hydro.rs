@@ -147,7 +147,14 @@ impl<K: Kernel> Hydro<K> {
     /// (the first step is at most `max_growth * dt0`). Initial conditions
     /// must have `dx = v dt0` (see [`Hydro::prepare`]).
     pub fn new(kernel: K, config: HydroConfig, t0: f64, dt0: f64) -> Result<Self, CoreError> {
-        Self::with_comm(kernel, config, t0, dt0, SerialComm::new(), DomainConfig::default())
+        Self::with_comm(
+            kernel,
+            config,
+            t0,
+            dt0,
+            SerialComm::new(),
+            DomainConfig::default(),
+        )
     }
 }
 

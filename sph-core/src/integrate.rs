@@ -10,8 +10,8 @@
 
 use crate::{CoreError, Particles};
 use rayon::prelude::*;
-use std::ops::Range;
 use sph_tree::BoundingBox;
+use std::ops::Range;
 
 /// Smoothing-length update `h <- h * 0.5 * (1 + c ng0 / nc)^(1/p)`, whose
 /// fixed point is `nc = ng0` (PHYSICS.md).

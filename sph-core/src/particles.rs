@@ -180,8 +180,19 @@ impl Particles {
     /// else is recomputed each step): what migration and halos move.
     fn persistent(&self) -> Vec<&Vec<f64>> {
         let mut v = vec![
-            &self.x, &self.y, &self.z, &self.vx, &self.vy, &self.vz, &self.dx, &self.dy,
-            &self.dz, &self.h, &self.m, &self.u, &self.du_prev,
+            &self.x,
+            &self.y,
+            &self.z,
+            &self.vx,
+            &self.vy,
+            &self.vz,
+            &self.dx,
+            &self.dy,
+            &self.dz,
+            &self.h,
+            &self.m,
+            &self.u,
+            &self.du_prev,
         ];
         v.extend(self.eos_ref.iter().filter(|f| !f.is_empty()));
         v
@@ -284,8 +295,18 @@ impl ParticleFields for Particles {
         let mut w = words[1..].iter().map(|&b| f64::from_bits(b));
         let mut next = || w.next().expect("packed particle too short");
         for f in [
-            &mut self.x, &mut self.y, &mut self.z, &mut self.vx, &mut self.vy, &mut self.vz,
-            &mut self.dx, &mut self.dy, &mut self.dz, &mut self.h, &mut self.m, &mut self.u,
+            &mut self.x,
+            &mut self.y,
+            &mut self.z,
+            &mut self.vx,
+            &mut self.vy,
+            &mut self.vz,
+            &mut self.dx,
+            &mut self.dy,
+            &mut self.dz,
+            &mut self.h,
+            &mut self.m,
+            &mut self.u,
             &mut self.du_prev,
         ] {
             f.push(next());
@@ -297,7 +318,12 @@ impl ParticleFields for Particles {
         }
         // Recomputed every step before use.
         for f in [
-            &mut self.rho, &mut self.p, &mut self.c, &mut self.ax, &mut self.ay, &mut self.az,
+            &mut self.rho,
+            &mut self.p,
+            &mut self.c,
+            &mut self.ax,
+            &mut self.ay,
+            &mut self.az,
             &mut self.du,
         ] {
             f.push(0.0);

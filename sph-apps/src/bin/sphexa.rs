@@ -231,11 +231,12 @@ fn run(a: RunArgs) -> Result<(), AppError> {
     } else {
         Progress::Auto
     };
-    let result = Simulation::with_comm(scene, kernel, kernel_choice.to_string(), comm)
-        .and_then(|mut sim| {
+    let result = Simulation::with_comm(scene, kernel, kernel_choice.to_string(), comm).and_then(
+        |mut sim| {
             sim.set_write_particles(a.write_particles);
             sim.run(stop, &out, progress)
-        });
+        },
+    );
     let s = match result {
         Ok(s) => s,
         Err(e) if ranks > 1 => {
