@@ -82,6 +82,9 @@
 //! * **Boundaries**: open only; a periodic box is refused with
 //!   [`GravityError::PeriodicBox`] (periodic gravity needs Ewald sums).
 
+#![warn(missing_docs)]
+#![forbid(unsafe_code)]
+
 pub mod direct;
 mod error;
 pub mod multipole;

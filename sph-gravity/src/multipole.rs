@@ -230,9 +230,16 @@ impl Multipoles {
     }
 
     /// Upward pass over `tree`, built over the particles `(x, y, z)` with
-    /// masses `m` in the tree's (SFC-sorted) order. Lengths are the
-    /// caller's responsibility (checked by assertion).
+    /// masses `m` in the tree's (SFC-sorted) order.
+    ///
+    /// # Panics
+    /// If a slice is shorter than the number of particles in the tree.
     pub fn compute(&mut self, tree: &Octree, x: &[f64], y: &[f64], z: &[f64], m: &[f64]) {
+        let n = tree.num_particles();
+        assert!(
+            x.len() >= n && y.len() >= n && z.len() >= n && m.len() >= n,
+            "multipole inputs shorter than the tree's {n} particles"
+        );
         upward(
             tree,
             &mut self.nodes,

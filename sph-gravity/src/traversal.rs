@@ -113,7 +113,8 @@ impl TreeGravity {
     /// Evaluates gravity on particles sorted in the order `tree` was built
     /// over (ascending SFC keys, as [`Octree::build`] requires), writing
     /// accelerations and potentials into `out` (resized) in that same
-    /// order. `bbox` is the box the keys were computed in; it must be open
+    /// order. `bbox` is the box the keys were computed in (the opening
+    /// criterion uses the nodes' geometric cells in it); it must be open
     /// on every axis. `h`, when given, are softening lengths (`>= 0`).
     pub fn compute(
         &mut self,
