@@ -5,9 +5,13 @@
 //! `r_eff^2 = max(r^2, (h_i + h_j)^2)` (no softening when `h` is `None`):
 //!
 //! ```text
-//! phi_i = -G sum_{j != i} m_j / r_eff
 //! a_i   =  G sum_{j != i} m_j (x_j - x_i) / r_eff^3
+//! phi_i = -G sum_{j != i} m_j / r_eff * (3/2 - r^2 / (2 r_eff^2))
 //! ```
+//!
+//! (the potential of a uniform sphere of radius `h_i + h_j` inside it, so
+//! that the force is minus its gradient and energy is conserved; `-m/r`
+//! outside).
 //!
 //! Coincident pairs with `r_eff = 0` (zero softening) are skipped. The
 //! code is deliberately plain (one scalar loop per target, sources in index
@@ -56,7 +60,8 @@ pub fn direct_sum(
                     continue;
                 }
                 let (dx, dy, dz) = (x[j] - xi, y[j] - yi, z[j] - zi);
-                let mut r2 = dx * dx + dy * dy + dz * dz;
+                let r2_true = dx * dx + dy * dy + dz * dz;
+                let mut r2 = r2_true;
                 if let Some(h) = h {
                     let hh = hi + h[j];
                     r2 = r2.max(hh * hh);
@@ -69,7 +74,9 @@ pub fn direct_sum(
                 sx += mr3 * dx;
                 sy += mr3 * dy;
                 sz += mr3 * dz;
-                sp -= m[j] / r;
+                // Uniform-sphere potential inside the softening length (its
+                // gradient is the softened force); -m/r outside.
+                sp -= m[j] / r * (1.5 - 0.5 * r2_true / r2);
             }
             *ax = g * sx;
             *ay = g * sy;

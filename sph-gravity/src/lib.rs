@@ -72,8 +72,12 @@
 //!   particles of the sorted order; one traversal builds the interaction
 //!   lists of a whole group.
 //! * **Softening** (as in SPH-EXA): `r_eff^2 = max(r^2, (h_i + h_j)^2)` for
-//!   particle pairs, so `phi = -G m / r_eff` and
-//!   `a = G m (x_j - x_i) / r_eff^3`. Without `h`, plain Newtonian gravity.
+//!   particle pairs, so `a = G m (x_j - x_i) / r_eff^3`, and the matching
+//!   potential, `-G m / r` outside `h_i + h_j` and that of a uniform sphere
+//!   of radius `eps = h_i + h_j` inside, `-G m (3 eps^2 - r^2) / (2 eps^3)`
+//!   (SPH-EXA keeps `-G m / r_eff`, whose gradient is not the force; ours
+//!   is, so total energy including `sum m phi / 2` is conserved). Without
+//!   `h`, plain Newtonian gravity.
 //!   The self pair `i == j` is always skipped, and so is a pair of
 //!   coincident particles with zero softening (`r_eff = 0`).
 //! * **Determinism**: each particle's contributions are summed in a fixed

@@ -532,7 +532,8 @@ fn p2p_group<const SOFT: bool>(
         let self_i = (s0 + j).wrapping_sub(t0);
         for i in 0..n {
             let (dx, dy, dz) = (xj - tx[i], yj - ty[i], zj - tz[i]);
-            let mut r2 = dx * dx + dy * dy + dz * dz;
+            let r2_true = dx * dx + dy * dy + dz * dz;
+            let mut r2 = r2_true;
             if SOFT {
                 let hh = th[i] + hj;
                 r2 = r2.max(hh * hh);
@@ -543,11 +544,14 @@ fn p2p_group<const SOFT: bool>(
                 0.0
             };
             let mr = mj * inv_r;
-            let mr3 = mr * inv_r * inv_r;
+            let inv_r2 = inv_r * inv_r;
+            let mr3 = mr * inv_r2;
             ax[i] += mr3 * dx;
             ay[i] += mr3 * dy;
             az[i] += mr3 * dz;
-            phi[i] -= mr;
+            // Inside the softening length the potential of a uniform sphere,
+            // whose gradient is the softened force (1 outside).
+            phi[i] -= mr * (1.5 - 0.5 * r2_true * inv_r2);
         }
     }
 }
