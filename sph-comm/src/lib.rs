@@ -1,8 +1,14 @@
-//! Communication layer of sph-exa-rs: the [`Communicator`] trait with a
-//! serial implementation ([`SerialComm`], always available) and an MPI one
-//! (`MpiComm`, cargo feature `mpi`, built on rsmpi), plus [`ExactSum`], a
-//! reproducible `f64` sum that gives the same bits for any number of threads
-//! and ranks.
+//! Communication layer of sph-exa-rs: the [`Communicator`] trait and its
+//! implementations, plus [`ExactSum`], a reproducible `f64` sum that gives
+//! the same bits for any number of threads and ranks.
+//!
+//! Implementations of [`Communicator`]:
+//! * [`SerialComm`]: one rank, always available;
+//! * `MpiComm` (cargo feature `mpi`, built on rsmpi): one rank per MPI
+//!   process;
+//! * [`ThreadComm`]: several ranks inside one process, one thread each,
+//!   started by [`run_ranks`]; no MPI needed, meant for testing multi-rank
+//!   code in a plain `cargo test`.
 //!
 //! Physics code is written once against `C: Communicator`; a serial run uses
 //! [`SerialComm`], an MPI run `MpiComm`, and nothing else differs.
@@ -34,6 +40,13 @@
 //! let g = comm.all_to_all_v(&[7u64, 8, 9], &[3]).unwrap();
 //! assert_eq!(g.data, vec![7, 8, 9]);
 //! assert_eq!(g.counts, vec![3]);
+//!
+//! // The same code on four in-process ranks.
+//! let energies = sph_comm::run_ranks(4, |comm| {
+//!     let r = comm.rank() as f64;
+//!     global_kinetic_energy(&comm, &[1.0], &[r])
+//! });
+//! assert_eq!(energies, vec![3.0; 4]);
 //! ```
 //!
 //! # Sparse exchange protocol (MPI)
@@ -54,6 +67,7 @@ mod exact_sum;
 mod mpi_comm;
 mod plain;
 mod serial;
+mod thread_comm;
 
 pub use communicator::{Communicator, Gathered, Received};
 pub use error::CommError;
@@ -62,3 +76,4 @@ pub use exact_sum::{exact_sum, ExactSum, LIMBS};
 pub use mpi_comm::{MpiComm, ThreadLevel};
 pub use plain::{Plain, ReduceOp, Reducible};
 pub use serial::SerialComm;
+pub use thread_comm::{run_ranks, ThreadComm};

@@ -10,8 +10,13 @@ mod sealed {
     #[cfg(not(feature = "mpi"))]
     pub trait Sealed {}
 
-    /// Seals [`super::Reducible`].
-    pub trait SealedReduce {}
+    /// Seals [`super::Reducible`]; brings the element-wise reduction used by
+    /// the in-process communicator.
+    pub trait SealedReduce: Sized {
+        /// `a op b`. Integer sums wrap (like MPI's); `Min`/`Max` keep `a`
+        /// unless `b` compares strictly smaller/larger.
+        fn combine(a: Self, b: Self, op: super::ReduceOp) -> Self;
+    }
 }
 
 /// Plain old data that can travel in messages: `f64`, `u64`, `i64`, `u32`,
@@ -48,9 +53,23 @@ pub enum ReduceOp {
 pub trait Reducible: Plain + sealed::SealedReduce {}
 
 macro_rules! impl_reducible {
-    ($($t:ty),*) => {$(
-        impl sealed::SealedReduce for $t {}
+    ($($t:ty => $sum:expr),*) => {$(
+        impl sealed::SealedReduce for $t {
+            #[inline]
+            fn combine(a: Self, b: Self, op: ReduceOp) -> Self {
+                match op {
+                    ReduceOp::Sum => $sum(a, b),
+                    ReduceOp::Min => if b < a { b } else { a },
+                    ReduceOp::Max => if b > a { b } else { a },
+                }
+            }
+        }
         impl Reducible for $t {}
     )*};
 }
-impl_reducible!(f64, u64, i64, usize);
+impl_reducible!(
+    f64 => <f64 as std::ops::Add>::add,
+    u64 => u64::wrapping_add,
+    i64 => i64::wrapping_add,
+    usize => usize::wrapping_add
+);
