@@ -29,8 +29,9 @@ impl<T> Gathered<T> {
 
 /// What every piece of the solver needs from the parallel environment.
 ///
-/// Implemented by [`crate::SerialComm`] (one rank, always available) and, with
-/// the cargo feature `mpi`, by `MpiComm`. The trait requires `Send + Sync` so
+/// Implemented by [`crate::SerialComm`] (one rank, always available),
+/// [`crate::ThreadComm`] (several ranks as threads of one process, for tests)
+/// and, with the cargo feature `mpi`, by `MpiComm`. The trait requires `Send + Sync` so
 /// that code running rayon loops can hold a reference to it; the methods
 /// themselves must only be called from one thread at a time (the thread that
 /// drives the time step), never from inside a rayon loop.
