@@ -246,6 +246,79 @@ fn draw_panel(
     Ok(())
 }
 
+/// One energy series of [`energy_png`]: name, colour and (t, E) samples.
+pub type EnergySeries<'a> = (&'a str, RGBColor, &'a [(f64, f64)]);
+
+/// Writes a PNG of energies against time: each series as a line, the
+/// reference values as large hollow markers of the series' colour.
+pub fn energy_png(
+    path: &Path,
+    title: &str,
+    series: &[EnergySeries<'_>],
+    reference: &[EnergySeries<'_>],
+) -> Result<(), AppError> {
+    render_energy(path, title, series, reference)
+        .map_err(|e| AppError::io(path, std::io::Error::other(e.to_string())))
+}
+
+fn render_energy(
+    path: &Path,
+    title: &str,
+    series: &[EnergySeries<'_>],
+    reference: &[EnergySeries<'_>],
+) -> Result<(), Box<dyn Error>> {
+    register_font()?;
+    let all = || series.iter().chain(reference).flat_map(|s| s.2.iter());
+    let t_max = all().map(|p| p.0).fold(0.0, f64::max).max(1e-12);
+    let (y_lo, y_hi) = y_range(all().map(|p| p.1));
+    let root = BitMapBackend::new(path, (1200, 700)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let body = root.titled(title, (FAMILY, 28))?;
+    let y_fmt = |v: &f64| tick_label(*v, y_hi - y_lo, y_lo.abs().max(y_hi.abs()));
+    let x_fmt = |v: &f64| tick_label(*v, t_max, t_max);
+    let mut chart = ChartBuilder::on(&body)
+        .margin(8)
+        .margin_right(24)
+        .x_label_area_size(44)
+        .y_label_area_size(90)
+        .build_cartesian_2d(0.0..t_max, y_lo..y_hi)?;
+    chart
+        .configure_mesh()
+        .x_desc("t")
+        .y_desc("energy")
+        .x_label_formatter(&x_fmt)
+        .y_label_formatter(&y_fmt)
+        .label_style((FAMILY, 17))
+        .axis_desc_style((FAMILY, 20))
+        .max_light_lines(4)
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()?;
+    for &(name, colour, points) in series {
+        chart
+            .draw_series(LineSeries::new(
+                points.iter().copied().filter(|p| p.1.is_finite()),
+                colour.stroke_width(2),
+            ))?
+            .label(name)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], colour.stroke_width(2)));
+    }
+    for &(name, colour, points) in reference {
+        chart
+            .draw_series(points.iter().map(|&xy| Circle::new(xy, 7, colour.stroke_width(2))))?
+            .label(name)
+            .legend(move |(x, y)| Circle::new((x + 12, y), 6, colour.stroke_width(2)));
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::LowerLeft)
+        .label_font((FAMILY, 18))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()?;
+    root.present()?;
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

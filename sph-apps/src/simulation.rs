@@ -90,6 +90,85 @@ pub struct Summary {
     pub ranks: usize,
     /// Decomposition figures, means over steps 2..N.
     pub domain: DomainSummary,
+    /// Energies against the case's reference table (times up to t_end;
+    /// the run's values interpolated linearly between steps).
+    pub energies: Vec<EnergyCheck>,
+}
+
+/// The run's energies at a reference time, beside the reference values.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct EnergyCheck {
+    /// Time.
+    pub t: f64,
+    /// Kinetic energy of the run.
+    pub e_kin: f64,
+    /// Internal energy of the run.
+    pub e_int: f64,
+    /// Gravitational energy of the run.
+    pub e_grav: f64,
+    /// Reference kinetic energy.
+    pub e_kin_ref: f64,
+    /// Reference internal energy.
+    pub e_int_ref: f64,
+    /// Reference gravitational energy.
+    pub e_grav_ref: f64,
+}
+
+/// `[E_kin, E_int, E_grav]` at `t`, linear between the samples `[t, ...]`
+/// (sorted by t).
+fn interpolate(samples: &[[f64; 4]], t: f64) -> [f64; 3] {
+    let k = samples.partition_point(|s| s[0] < t);
+    if k == 0 {
+        return [samples[0][1], samples[0][2], samples[0][3]];
+    }
+    if k == samples.len() {
+        let s = samples[k - 1];
+        return [s[1], s[2], s[3]];
+    }
+    let (a, b) = (samples[k - 1], samples[k]);
+    let w = if b[0] > a[0] { (t - a[0]) / (b[0] - a[0]) } else { 1.0 };
+    std::array::from_fn(|j| a[j + 1] + w * (b[j + 1] - a[j + 1]))
+}
+
+/// Energies against time with the reference values as markers.
+fn write_energy_plot(
+    path: &Path,
+    title: &str,
+    samples: &[[f64; 4]],
+    reference: &[crate::cases::EnergyPoint],
+) -> Result<(), AppError> {
+    use plotters::style::RGBColor;
+    let pick = |f: fn(&[f64; 4]) -> f64| -> Vec<(f64, f64)> {
+        samples.iter().map(|s| (s[0], f(s))).collect()
+    };
+    let kin = pick(|s| s[1]);
+    let int = pick(|s| s[2]);
+    let grav = pick(|s| s[3]);
+    let tot = pick(|s| s[1] + s[2] + s[3]);
+    let colours = [
+        RGBColor(214, 39, 40),
+        RGBColor(31, 119, 180),
+        RGBColor(44, 160, 44),
+        RGBColor(0, 0, 0),
+    ];
+    let rk: Vec<(f64, f64)> = reference.iter().map(|e| (e.t, e.e_kin)).collect();
+    let ri: Vec<(f64, f64)> = reference.iter().map(|e| (e.t, e.e_int)).collect();
+    let rg: Vec<(f64, f64)> = reference.iter().map(|e| (e.t, e.e_grav)).collect();
+    crate::plot::energy_png(
+        path,
+        title,
+        &[
+            ("E_kin", colours[0], &kin),
+            ("E_int", colours[1], &int),
+            ("E_grav", colours[2], &grav),
+            ("E_tot", colours[3], &tot),
+        ],
+        &[
+            ("E_kin ref", colours[0], &rk),
+            ("E_int ref", colours[1], &ri),
+            ("E_grav ref", colours[2], &rg),
+        ],
+    )
 }
 
 /// Decomposition figures of a run (means over steps 2..N).
@@ -181,47 +260,48 @@ impl<C: Communicator> Simulation<C> {
     }
 
     /// Every rank's owned particles, sorted by id, on every rank (for
-    /// observables and state dumps): id, position, velocity, h, m, u, rho, P.
+    /// observables and state dumps): id, position, velocity, h, m, u, rho,
+    /// P and, with self-gravity, phi.
     pub fn gather(&self) -> Result<Particles, AppError> {
         let p = &self.scene.particles;
+        let gravity = !p.phi.is_empty();
+        let fields: Vec<&[f64]> = [
+            &p.x, &p.y, &p.z, &p.vx, &p.vy, &p.vz, &p.h, &p.m, &p.u, &p.rho, &p.p, &p.phi,
+        ]
+        .into_iter()
+        .filter(|f| !f.is_empty())
+        .map(|f| f.as_slice())
+        .collect();
+        let words = 1 + fields.len();
         let owned = self.hydro.owned();
-        let fields = |p: &Particles| -> [Vec<f64>; 11] {
-            [
-                p.x.clone(),
-                p.y.clone(),
-                p.z.clone(),
-                p.vx.clone(),
-                p.vy.clone(),
-                p.vz.clone(),
-                p.h.clone(),
-                p.m.clone(),
-                p.u.clone(),
-                p.rho.clone(),
-                p.p.clone(),
-            ]
-        };
-        let mut words = Vec::with_capacity(owned.len() * 12);
-        let local = fields(p);
+        let mut send = Vec::with_capacity(owned.len() * words);
         for i in owned {
-            words.push(p.id[i]);
-            words.extend(local.iter().map(|f| f[i].to_bits()));
+            send.push(p.id[i]);
+            send.extend(fields.iter().map(|f| f[i].to_bits()));
         }
-        let all = self.hydro.domain().comm().all_gather_v(&words)?;
-        let mut rows: Vec<&[u64]> = all.data.chunks_exact(12).collect();
+        let all = self.hydro.domain().comm().all_gather_v(&send)?;
+        let mut rows: Vec<&[u64]> = all.data.chunks_exact(words).collect();
         rows.sort_unstable_by_key(|r| r[0]);
         let mut g = Particles::new(
             rows.len(),
             FieldSet {
                 iad: false,
                 grad_h: false,
+                gravity,
             },
         );
         for (k, r) in rows.iter().enumerate() {
             g.id[k] = r[0];
-            let f = |j: usize| f64::from_bits(r[j]);
-            (g.x[k], g.y[k], g.z[k]) = (f(1), f(2), f(3));
-            (g.vx[k], g.vy[k], g.vz[k]) = (f(4), f(5), f(6));
-            (g.h[k], g.m[k], g.u[k], g.rho[k], g.p[k]) = (f(7), f(8), f(9), f(10), f(11));
+            let mut dst: Vec<&mut Vec<f64>> = vec![
+                &mut g.x, &mut g.y, &mut g.z, &mut g.vx, &mut g.vy, &mut g.vz, &mut g.h, &mut g.m,
+                &mut g.u, &mut g.rho, &mut g.p,
+            ];
+            if gravity {
+                dst.push(&mut g.phi);
+            }
+            for (d, &w) in dst.into_iter().zip(&r[1..]) {
+                d[k] = f64::from_bits(w);
+            }
         }
         Ok(g)
     }
@@ -241,7 +321,7 @@ impl<C: Communicator> Simulation<C> {
         if root {
             std::fs::create_dir_all(out).map_err(|e| AppError::io(out, e))?;
             let mut c = CsvFile::create(&out.join("conserved.csv"))?;
-            c.line("step,t,dt,E_kin,E_int,E_tot,px,py,pz,Lx,Ly,Lz,nc_min,nc_max,nc_mean")?;
+            c.line("step,t,dt,E_kin,E_int,E_grav,E_tot,px,py,pz,Lx,Ly,Lz,nc_min,nc_max,nc_mean")?;
             let mut t = CsvFile::create(&out.join("timings.csv"))?;
             t.line(&format!(
                 "step,{},total,owned_min,owned_max,halo_ratio,halo_ratio_max,bytes_sent,comm_s_max,sync_s_max",
@@ -255,11 +335,12 @@ impl<C: Communicator> Simulation<C> {
         let bar = ProgressReporter::new(if root { progress } else { Progress::Quiet }, stop);
         let start = Instant::now();
         let mut first: Option<Conserved> = None;
-        let mut stage_sum = [0.0; 9];
+        let mut stage_sum = [0.0; STAGES.len()];
         let mut dom = DomainSummary::default();
         let mut timed_steps = 0u64;
         let mut fallbacks = 0;
         let mut last_report: Option<StepReport> = None;
+        let mut energies: Vec<[f64; 4]> = Vec::new();
         loop {
             let t = self.hydro.time();
             let steps = self.hydro.steps();
@@ -275,10 +356,12 @@ impl<C: Communicator> Simulation<C> {
                 .hydro
                 .step(&mut self.scene.particles, &mut self.scene.bbox)?;
             first.get_or_insert(r.conserved);
+            let c = &r.conserved;
+            energies.push([r.t, c.e_kin, c.e_int, c.e_grav]);
             let d = r.domain;
             let halo_ratio = d.halos_total as f64 / n.max(1) as f64;
             if r.step >= 2 {
-                for k in 0..9 {
+                for k in 0..STAGES.len() {
                     stage_sum[k] += r.times.0[k];
                 }
                 dom.halo_ratio_mean += halo_ratio;
@@ -293,8 +376,8 @@ impl<C: Communicator> Simulation<C> {
             let c = &r.conserved;
             if let (Some(cc), Some(tc)) = (conserved_csv.as_mut(), timings_csv.as_mut()) {
                 cc.line(&format!(
-                    "{},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{},{},{:.6}",
-                    r.step, r.t, r.dt, c.e_kin, c.e_int, c.e_tot(),
+                    "{},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{},{},{:.6}",
+                    r.step, r.t, r.dt, c.e_kin, c.e_int, c.e_grav, c.e_tot(),
                     c.momentum[0], c.momentum[1], c.momentum[2],
                     c.angular_momentum[0], c.angular_momentum[1], c.angular_momentum[2],
                     r.neighbors.min_count, r.neighbors.max_count,
@@ -351,6 +434,26 @@ impl<C: Communicator> Simulation<C> {
         let ranks = comm.size();
         let p = &self.gather()?;
         let (end, []) = Conserved::compute(p, 0..p.len(), [], &SerialComm::new());
+        energies.push([t_end, end.e_kin, end.e_int, end.e_grav]);
+        let energy_check: Vec<EnergyCheck> = self
+            .scene
+            .energies
+            .unwrap_or(&[])
+            .iter()
+            .filter(|e| e.t <= t_end * (1.0 + 1e-12))
+            .map(|e| {
+                let at = interpolate(&energies, e.t);
+                EnergyCheck {
+                    t: e.t,
+                    e_kin: at[0],
+                    e_int: at[1],
+                    e_grav: at[2],
+                    e_kin_ref: e.e_kin,
+                    e_int_ref: e.e_int,
+                    e_grav_ref: e.e_grav,
+                }
+            })
+            .collect();
         let first = first.unwrap_or(end);
         let mean_step_s = if timed_steps > 0 {
             stage_sum.iter().sum::<f64>() / timed_steps as f64
@@ -434,6 +537,7 @@ impl<C: Communicator> Simulation<C> {
             energy_fallbacks: fallbacks,
             ranks,
             domain: dom,
+            energies: energy_check,
         };
         if root {
             // Last row: the mean over steps 2..N (step 1 holds set-up costs).
@@ -456,6 +560,14 @@ impl<C: Communicator> Simulation<C> {
                 tc.flush()?;
             }
             write_profile(&out.join("profile.csv"), &bins)?;
+            if self.scene.config.gravity.is_some() || self.scene.energies.is_some() {
+                write_energy_plot(
+                    &out.join("energies.png"),
+                    &format!("{}, {n} particles", self.scene.case),
+                    &energies,
+                    self.scene.energies.unwrap_or(&[]),
+                )?;
+            }
             let title = format!("{}, {n} particles, t = {t_end:.4}", self.scene.case);
             crate::plot::profile_png(&out.join("profile.png"), &title, &bins)?;
             if self.write_particles {

@@ -8,8 +8,9 @@ use std::ops::Range;
 
 /// Particles per partial sum (one set of accumulators per chunk).
 const CHUNK: usize = 4096;
-/// Sums per particle: mass, E_kin, E_int, momentum (3), angular momentum (3).
-const SUMS: usize = 9;
+/// Sums per particle: mass, E_kin, E_int, momentum (3), angular momentum
+/// (3), E_grav.
+const SUMS: usize = 10;
 
 /// Totals over all particles.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -20,6 +21,8 @@ pub struct Conserved {
     pub e_kin: f64,
     /// Internal energy `sum m u`.
     pub e_int: f64,
+    /// Gravitational energy `sum m phi / 2` (zero without self-gravity).
+    pub e_grav: f64,
     /// Linear momentum.
     pub momentum: [f64; 3],
     /// Angular momentum about the origin, `sum m x × v`.
@@ -27,9 +30,9 @@ pub struct Conserved {
 }
 
 impl Conserved {
-    /// Total energy (kinetic + internal).
+    /// Total energy (kinetic + internal + gravitational).
     pub fn e_tot(&self) -> f64 {
-        self.e_kin + self.e_int
+        self.e_kin + self.e_int + self.e_grav
     }
 
     /// Sums over the `owned` particles of `p` on every rank of `comm`, plus
@@ -42,6 +45,7 @@ impl Conserved {
         comm: &C,
     ) -> (Self, [f64; E]) {
         let chunks = owned.len().div_ceil(CHUNK);
+        let with_phi = !p.phi.is_empty();
         let mut sums: Vec<ExactSum> = (0..chunks)
             .into_par_iter()
             .map(|c| {
@@ -60,6 +64,9 @@ impl Conserved {
                     s[6].add(m * (x[1] * v[2] - x[2] * v[1]));
                     s[7].add(m * (x[2] * v[0] - x[0] * v[2]));
                     s[8].add(m * (x[0] * v[1] - x[1] * v[0]));
+                    if with_phi {
+                        s[9].add(0.5 * m * p.phi[i]);
+                    }
                 }
                 s
             })
@@ -85,6 +92,7 @@ impl Conserved {
             mass: v[0],
             e_kin: v[1],
             e_int: v[2],
+            e_grav: v[9],
             momentum: [v[3], v[4], v[5]],
             angular_momentum: [v[6], v[7], v[8]],
         };

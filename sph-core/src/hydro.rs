@@ -12,6 +12,7 @@ use crate::timestep::TimestepParams;
 use crate::{CoreError, Particles};
 use sph_comm::{Communicator, ReduceOp, SerialComm};
 use sph_domain::{Domain, DomainConfig, SyncStats};
+use sph_gravity::{GravityField, GravityParams, GravityStats, TreeGravity};
 use sph_kernels::Kernel;
 use sph_tree::{BoundingBox, CompactNeighborList, Curve, NeighborStats, Octree};
 use std::ops::Range;
@@ -39,6 +40,8 @@ pub struct HydroConfig {
     /// Whether the grad-h factor Omega enters the equations (its field is
     /// only allocated then).
     pub grad_h: bool,
+    /// Self-gravity (tree multipoles; open boxes only), or none.
+    pub gravity: Option<GravityParams>,
 }
 
 impl Default for HydroConfig {
@@ -53,12 +56,13 @@ impl Default for HydroConfig {
             curve: Curve::Hilbert,
             bucket: 16,
             grad_h: true,
+            gravity: None,
         }
     }
 }
 
 /// Names of the timed stages, in pipeline order.
-pub const STAGES: [&str; 9] = [
+pub const STAGES: [&str; 10] = [
     "sync",
     "tree",
     "neighbors",
@@ -66,13 +70,14 @@ pub const STAGES: [&str; 9] = [
     "eos",
     "iad",
     "momentum",
+    "gravity",
     "conserved",
     "integrate",
 ];
 
 /// Wall-clock seconds per stage, accumulated.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct StageTimes(pub [f64; 9]);
+pub struct StageTimes(pub [f64; 10]);
 
 impl StageTimes {
     /// Sum over stages.
@@ -136,6 +141,8 @@ pub struct Hydro<K: Kernel, C: Communicator = SerialComm> {
     list: CompactNeighborList,
     factors: PairFactors,
     h_before: Vec<f64>,
+    gravity: Option<TreeGravity>,
+    field: GravityField,
     step: u64,
     t: f64,
     dt_prev: f64,
@@ -193,6 +200,12 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             list: CompactNeighborList::new(),
             factors: PairFactors::default(),
             h_before: Vec::new(),
+            gravity: config
+                .gravity
+                .map(TreeGravity::new)
+                .transpose()
+                .map_err(|e| CoreError::Invalid(format!("gravity: {e}")))?,
+            field: GravityField::new(),
             step: 0,
             t: t0,
             dt_prev: dt0,
@@ -359,6 +372,20 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             p.du_prev[owned.clone()].copy_from_slice(&p.du[owned.clone()]);
         }
         lap(6, &mut times);
+        let mut max_acc = 0.0;
+        if self.gravity.is_some() {
+            self.gravity_field(p, bbox, owned.clone(), step)?;
+            let f = &self.field;
+            for i in owned.clone() {
+                p.ax[i] += f.ax[i];
+                p.ay[i] += f.ay[i];
+                p.az[i] += f.az[i];
+            }
+            max_acc = (owned.clone())
+                .map(|i| (p.ax[i] * p.ax[i] + p.ay[i] * p.ay[i] + p.az[i] * p.az[i]).sqrt())
+                .fold(0.0, f64::max);
+        }
+        lap(7, &mut times);
 
         // One global sum: conserved quantities, neighbour and domain totals.
         let sync = self.domain.stats();
@@ -373,7 +400,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             ],
             self.domain.comm(),
         );
-        lap(7, &mut times);
+        lap(8, &mut times);
 
         // One global minimum: time-step criteria, neighbour and domain
         // extremes (maxima as minima of negatives).
@@ -387,6 +414,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             -(sync.halos as f64 / sync.owned.max(1) as f64),
             -sync.comm_seconds,
             -sync.sync_seconds,
+            -max_acc,
         ];
         if owned.is_empty() {
             mins[2] = f64::INFINITY;
@@ -417,7 +445,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         let dt = self
             .config
             .timestep
-            .dt(&global, self.dt_prev)
+            .dt(&global, -mins[9], self.dt_prev)
             .min(self.dt_cap);
         self.dt_cap = f64::INFINITY;
         let h_update = self.config.neighbors.h_update(self.config.h_update);
@@ -432,7 +460,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             guard,
             step,
         )?;
-        lap(8, &mut times);
+        lap(9, &mut times);
 
         let t = self.t;
         self.t += dt;
@@ -452,8 +480,46 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
 }
 
 impl<K: Kernel, C: Communicator> Hydro<K, C> {
-    /// Recomputes neighbours, density and pressure at the current positions
-    /// without advancing (for observables at the end of a run). Afterwards
+    /// Evaluates the self-gravity of all particles on the owned ones (into
+    /// the gravity field buffer) and stores their potential in `phi`.
+    fn gravity_field(
+        &mut self,
+        p: &mut Particles,
+        bbox: &BoundingBox,
+        owned: Range<usize>,
+        step: u64,
+    ) -> Result<GravityStats, CoreError> {
+        let Some(solver) = self.gravity.as_mut() else {
+            return Ok(GravityStats::default());
+        };
+        if self.domain.comm().size() > 1 {
+            return Err(CoreError::Invalid(
+                "self-gravity over several ranks is not available yet; run on one rank".into(),
+            ));
+        }
+        if p.phi.len() != p.len() {
+            return Err(CoreError::Invalid(
+                "self-gravity needs the potential field: build the particles with FieldSet { gravity: true, .. }".into(),
+            ));
+        }
+        let stats = solver
+            .compute(
+                &self.tree,
+                bbox,
+                &p.x,
+                &p.y,
+                &p.z,
+                &p.m,
+                Some(&p.h),
+                &mut self.field,
+            )
+            .map_err(|e| CoreError::Invalid(format!("step {step}: gravity: {e}")))?;
+        p.phi[owned.clone()].copy_from_slice(&self.field.phi[owned]);
+        Ok(stats)
+    }
+
+    /// Recomputes neighbours, density, pressure (and the gravitational
+    /// potential) at the current positions without advancing (for observables at the end of a run). Afterwards
     /// the local arrays hold halos again: use [`owned`](Self::owned).
     pub fn evaluate_density(
         &mut self,
@@ -465,8 +531,12 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             .rebuild(self.domain.keys(), &p.x, &p.y, &p.z, self.config.bucket)?;
         self.search(p, bbox, self.step, owned.clone())?;
         self.density(p, bbox);
-        self.eos(p, owned)?;
-        self.exchange_thermo(p)
+        self.eos(p, owned.clone())?;
+        self.exchange_thermo(p)?;
+        if self.gravity.is_some() {
+            self.gravity_field(p, bbox, owned, self.step)?;
+        }
+        Ok(())
     }
 
     /// Neighbour lists of the owned particles, with the h iteration. Counts

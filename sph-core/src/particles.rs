@@ -16,6 +16,8 @@ pub struct FieldSet {
     pub iad: bool,
     /// The grad-h factor Omega.
     pub grad_h: bool,
+    /// The gravitational potential (self-gravity runs).
+    pub gravity: bool,
 }
 
 impl Default for FieldSet {
@@ -23,6 +25,7 @@ impl Default for FieldSet {
         Self {
             iad: true,
             grad_h: true,
+            gravity: false,
         }
     }
 }
@@ -77,6 +80,8 @@ pub struct Particles {
     pub du: Vec<f64>,
     /// du/dt of the previous step (Adams-Bashforth).
     pub du_prev: Vec<f64>,
+    /// Gravitational potential per unit mass (empty without self-gravity).
+    pub phi: Vec<f64>,
     /// Per-particle reference density and pressure of
     /// [`Eos::TaitReferenced`](crate::Eos) (empty otherwise); a zero
     /// density is calibrated from the first density evaluation.
@@ -108,6 +113,7 @@ impl Particles {
             p: z(),
             c: z(),
             omega: Vec::new(),
+            phi: Vec::new(),
             iad: Default::default(),
             ax: z(),
             ay: z(),
@@ -123,6 +129,9 @@ impl Particles {
         }
         if fields.iad {
             p.iad = std::array::from_fn(|_| vec![0.0; n]);
+        }
+        if fields.gravity {
+            p.phi = vec![0.0; n];
         }
         p
     }
@@ -168,6 +177,9 @@ impl Particles {
         if !self.omega.is_empty() {
             v.push(&mut self.omega);
         }
+        if !self.phi.is_empty() {
+            v.push(&mut self.phi);
+        }
         for c in self.iad.iter_mut().chain(self.eos_ref.iter_mut()) {
             if !c.is_empty() {
                 v.push(c);
@@ -201,7 +213,8 @@ impl Particles {
     /// Bytes held per particle by the particle arrays (not counting
     /// neighbour lists or the tree).
     pub fn bytes_per_particle(&self) -> usize {
-        let optional = std::iter::once(&self.omega)
+        let optional = [&self.omega, &self.phi]
+            .into_iter()
             .chain(self.iad.iter())
             .chain(self.eos_ref.iter())
             .filter(|v| !v.is_empty())
@@ -330,6 +343,9 @@ impl ParticleFields for Particles {
         }
         if self.fields.grad_h {
             self.omega.push(1.0);
+        }
+        if self.fields.gravity {
+            self.phi.push(0.0);
         }
         if self.fields.iad {
             for f in self.iad.iter_mut() {

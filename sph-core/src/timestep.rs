@@ -11,6 +11,11 @@ pub struct TimestepParams {
     pub k_rho: f64,
     /// Largest growth factor from one step to the next.
     pub max_growth: f64,
+    /// Factor `eta` of the acceleration criterion `eta sqrt(eps / |a|)`
+    /// (used when the run has self-gravity).
+    pub eta_acc: f64,
+    /// Length `eps` of the acceleration criterion.
+    pub eps_acc: f64,
 }
 
 impl Default for TimestepParams {
@@ -19,20 +24,28 @@ impl Default for TimestepParams {
             k_courant: 0.2,
             k_rho: 0.06,
             max_growth: 1.1,
+            eta_acc: 0.2,
+            eps_acc: 0.005,
         }
     }
 }
 
 impl TimestepParams {
-    /// `dt = min(Kcour min h/v_sig, Krho / max|div v|, growth * dt_prev)`,
-    /// from stats already reduced over all particles (and ranks).
-    pub fn dt(&self, stats: &MomentumStats, dt_prev: f64) -> f64 {
+    /// `dt = min(Kcour min h/v_sig, Krho / max|div v|, eta sqrt(eps/max|a|),
+    /// growth * dt_prev)`, from stats already reduced over all particles
+    /// (and ranks); `max_acc` is zero when the acceleration criterion is off.
+    pub fn dt(&self, stats: &MomentumStats, max_acc: f64, dt_prev: f64) -> f64 {
         let courant = self.k_courant * stats.min_h_over_vsig;
         let div = if stats.max_abs_div_v > 0.0 {
             self.k_rho / stats.max_abs_div_v
         } else {
             f64::INFINITY
         };
-        courant.min(div).min(self.max_growth * dt_prev)
+        let acc = if max_acc > 0.0 {
+            self.eta_acc * (self.eps_acc / max_acc).sqrt()
+        } else {
+            f64::INFINITY
+        };
+        courant.min(div).min(acc).min(self.max_growth * dt_prev)
     }
 }

@@ -318,6 +318,7 @@ fn integrator_is_time_reversible() {
         FieldSet {
             iad: false,
             grad_h: false,
+            gravity: false,
         },
     );
     let bbox = BoundingBox::cube(-10.0, 10.0, Boundary::Open).unwrap();

@@ -201,6 +201,7 @@ fn run(a: RunArgs) -> Result<(), AppError> {
         "sedov" => cases::sedov::setup(side, config)?,
         "noh" => cases::noh::setup(side, config)?,
         "square-patch" => cases::square_patch::setup(side, config)?,
+        "evrard" => cases::evrard::setup(side, config)?,
         other => return Err(AppError::Usage(format!("case {other} has no set-up"))),
     };
     let stop = match (a.steps, a.end_time) {

@@ -5,6 +5,7 @@ use crate::reference::{FlowState, Noh, Sedov};
 use sph_core::{HydroConfig, Particles};
 use sph_tree::BoundingBox;
 
+pub mod evrard;
 pub mod noh;
 pub mod sedov;
 pub mod square_patch;
@@ -23,11 +24,24 @@ pub struct CaseInfo {
 }
 
 /// Every case, in listing order.
-pub const CASES: [CaseInfo; 3] = [sedov::INFO, noh::INFO, square_patch::INFO];
+pub const CASES: [CaseInfo; 4] = [sedov::INFO, noh::INFO, square_patch::INFO, evrard::INFO];
 
 /// Looks a case up by name.
 pub fn find(name: &str) -> Option<&'static CaseInfo> {
     CASES.iter().find(|c| c.name == name)
+}
+
+/// Reference energies of a case at one time.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct EnergyPoint {
+    /// Time.
+    pub t: f64,
+    /// Kinetic energy.
+    pub e_kin: f64,
+    /// Internal (thermal) energy.
+    pub e_int: f64,
+    /// Gravitational energy.
+    pub e_grav: f64,
 }
 
 /// A radially symmetric analytic solution to compare against.
@@ -72,6 +86,8 @@ pub struct Scene {
     pub dt0: f64,
     /// Analytic solution, if any.
     pub reference: Option<Reference>,
+    /// Reference energies over time, if any.
+    pub energies: Option<&'static [EnergyPoint]>,
 }
 
 /// Particles of an `n^3` lattice of cell centres in the cube

@@ -40,6 +40,7 @@ pub fn setup(side: usize, mut config: HydroConfig) -> Result<Scene, AppError> {
         FieldSet {
             iad: config.gradients == sph_core::Gradients::Iad,
             grad_h: config.grad_h,
+            gravity: false,
         },
     );
     for (i, q) in pts.iter().enumerate() {
@@ -63,5 +64,6 @@ pub fn setup(side: usize, mut config: HydroConfig) -> Result<Scene, AppError> {
         reference: Some(Reference::Noh(
             Noh::new(GAMMA, rho0, 1.0)?.with_ambient_u(U0),
         )),
+        energies: None,
     })
 }

@@ -33,6 +33,7 @@ pub fn setup(side: usize, mut config: HydroConfig) -> Result<Scene, AppError> {
         FieldSet {
             iad: config.gradients == sph_core::Gradients::Iad,
             grad_h: config.grad_h,
+            gravity: false,
         },
     );
     let h0 = initial_h(config.neighbors.ng0, 1.0, n);
@@ -53,5 +54,6 @@ pub fn setup(side: usize, mut config: HydroConfig) -> Result<Scene, AppError> {
         config,
         dt0: 1e-6,
         reference: Some(Reference::Sedov(reference)),
+        energies: None,
     })
 }

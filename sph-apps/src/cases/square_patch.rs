@@ -61,6 +61,7 @@ pub fn setup(side: usize, mut config: HydroConfig) -> Result<Scene, AppError> {
         FieldSet {
             iad: config.gradients == sph_core::Gradients::Iad,
             grad_h: config.grad_h,
+            gravity: false,
         },
     );
     let h0 = initial_h(config.neighbors.ng0, L * L * L, n);
@@ -91,5 +92,6 @@ pub fn setup(side: usize, mut config: HydroConfig) -> Result<Scene, AppError> {
         config,
         dt0: 1e-5,
         reference: None,
+        energies: None,
     })
 }

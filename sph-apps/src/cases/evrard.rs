@@ -1,0 +1,94 @@
+//! Evrard collapse: a cold gas sphere with `rho ~ 1/r` (G = M = R = 1)
+//! falls in under its own gravity, bounces and settles; compared with the
+//! energies of a 1-D Lagrangian reference.
+
+use super::{cube_lattice, initial_h, CaseInfo, EnergyPoint, Scene};
+use crate::AppError;
+use sph_core::{Eos, FieldSet, HydroConfig, Particles};
+use sph_gravity::GravityParams;
+use sph_tree::{Boundary, BoundingBox};
+
+/// Listing entry.
+pub const INFO: CaseInfo = CaseInfo {
+    name: "evrard",
+    description: "Evrard collapse of a self-gravitating gas sphere vs reference energies",
+    default_side: 30,
+    default_end_time: 2.0,
+};
+
+/// Adiabatic index.
+pub const GAMMA: f64 = 5.0 / 3.0;
+/// Initial specific internal energy.
+pub const U0: f64 = 0.05;
+
+/// Energies of the 1-D Lagrangian reference (VALIDATION.md, +-2%):
+/// (t, E_kin, E_int, E_grav).
+pub const ENERGIES: [EnergyPoint; 4] = [
+    EnergyPoint {
+        t: 0.8,
+        e_kin: 0.4119,
+        e_int: 0.4662,
+        e_grav: -1.4948,
+    },
+    EnergyPoint {
+        t: 1.0,
+        e_kin: 0.2723,
+        e_int: 1.5765,
+        e_grav: -2.4654,
+    },
+    EnergyPoint {
+        t: 2.0,
+        e_kin: 0.2292,
+        e_int: 0.7351,
+        e_grav: -1.5810,
+    },
+    EnergyPoint {
+        t: 3.0,
+        e_kin: 0.2046,
+        e_int: 0.7725,
+        e_grav: -1.5937,
+    },
+];
+
+/// Builds the scene: the unit sphere cut from a `side^3` lattice of the
+/// cube `[-1, 1]^3`, stretched radially (`r -> r^(3/2)`) so that the
+/// enclosed mass goes as `r^2`, i.e. `rho = 1 / (2 pi r)`; equal masses
+/// `1/N`, at rest, `u = 0.05`; h from the local density.
+pub fn setup(side: usize, mut config: HydroConfig) -> Result<Scene, AppError> {
+    let pts: Vec<[f64; 3]> = cube_lattice(side, -1.0, 2.0)
+        .filter(|q| q[0] * q[0] + q[1] * q[1] + q[2] * q[2] < 1.0)
+        .collect();
+    let n = pts.len();
+    let mut p = Particles::new(
+        n,
+        FieldSet {
+            iad: config.gradients == sph_core::Gradients::Iad,
+            grad_h: config.grad_h,
+            gravity: true,
+        },
+    );
+    let m = 1.0 / n as f64;
+    for (i, q) in pts.iter().enumerate() {
+        let r = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
+        let s = r.sqrt(); // r^(3/2) / r
+        (p.x[i], p.y[i], p.z[i]) = (q[0] * s, q[1] * s, q[2] * s);
+        let r_new = r * s;
+        // Number density N rho / M = N / (2 pi r): a uniform set of that
+        // density in the unit volume has 2 pi r / N per particle.
+        let volume_per = 2.0 * std::f64::consts::PI * r_new.max(0.5 / side as f64) / n as f64;
+        p.h[i] = initial_h(config.neighbors.ng0, volume_per, 1);
+        p.m[i] = m;
+        p.u[i] = U0;
+    }
+    config.eos = Eos::IdealGas { gamma: GAMMA };
+    config.gravity = Some(config.gravity.unwrap_or(GravityParams::default()));
+    Ok(Scene {
+        case: INFO.name,
+        particles: p,
+        bbox: BoundingBox::cube(-1.0, 1.0, Boundary::Open)?,
+        config,
+        dt0: 1e-4,
+        reference: None,
+        energies: Some(&ENERGIES),
+    })
+}
