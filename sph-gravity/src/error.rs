@@ -61,6 +61,12 @@ pub enum GravityError {
         /// Particles given to the evaluation.
         particles: usize,
     },
+    /// Key ranges that do not describe a decomposition over the ranks.
+    #[error("invalid decomposition: {0}")]
+    InvalidDecomposition(String),
+    /// Communication between ranks failed.
+    #[error("communication failed: {0}")]
+    Communication(String),
     /// An error of the tree crate (key computation or tree build).
     #[error(transparent)]
     Tree(#[from] TreeError),

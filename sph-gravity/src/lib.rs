@@ -90,10 +90,12 @@
 #![forbid(unsafe_code)]
 
 pub mod direct;
+pub mod distributed;
 mod error;
 pub mod multipole;
 mod traversal;
 
+pub use distributed::{Decomposition, DistributedGravity};
 pub use error::GravityError;
 pub use multipole::{ExpansionOrder, Multipole, Multipoles};
 pub use traversal::TreeGravity;

@@ -219,9 +219,15 @@ fn softened_potential_gradient_is_the_force() {
     let h = [0.3, 0.2]; // softening length 0.5
     for r in [0.1, 0.3, 0.49, 0.7, 2.0] {
         let phi_at = |r: f64| {
-            let (f, _) =
-                compute_gravity(&[0.0, r], &[0.0; 2], &[0.0; 2], &[1.0, 2.0], Some(&h), &params)
-                    .unwrap();
+            let (f, _) = compute_gravity(
+                &[0.0, r],
+                &[0.0; 2],
+                &[0.0; 2],
+                &[1.0, 2.0],
+                Some(&h),
+                &params,
+            )
+            .unwrap();
             f
         };
         let d = 1e-6;
