@@ -1,10 +1,14 @@
 //! Hot paths of sph-core on 1e5 particles (a perturbed 46^3 lattice in a
-//! periodic box, ~100 neighbours): density + grad-h, IAD, momentum-energy.
+//! periodic box, ~100 neighbours): density + grad-h, IAD, momentum-energy
+//! (constant and per-particle viscosity), AV switches.
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use sph_core::av_switch::{update_alpha, velocity_divergence, AvSwitchParams, FlowState};
 use sph_core::density::{density, Positions};
 use sph_core::iad::iad;
-use sph_core::momentum::{momentum_energy, Gradients, HydroState, PairFactors, Rates};
+use sph_core::momentum::{
+    momentum_energy, momentum_energy_switched, Gradients, HydroState, PairFactors, Rates,
+};
 use sph_core::{Eos, FieldSet, Particles};
 use sph_kernels::{Sinc, Tabulated};
 use sph_tree::{
@@ -128,12 +132,50 @@ fn benches(c: &mut Criterion) {
         factors.fill(&state);
         g.bench_function(name, |b| {
             b.iter(|| {
-                let rates = Rates { ax, ay, az, du };
+                let rates = Rates {
+                    ax: &mut *ax,
+                    ay: &mut *ay,
+                    az: &mut *az,
+                    du: &mut *du,
+                };
                 black_box(momentum_energy(
                     &kernel, &bbox, state, &factors, grad, 1.0, &list, rates,
                 ))
             })
         });
+        // Per-particle alpha in [0.05, 1].
+        let alpha: Vec<f64> = (0..rho.len())
+            .map(|i| 0.05 + 0.95 * ((i * 7919) % 1000) as f64 / 1000.0)
+            .collect();
+        g.bench_function(format!("{name}_switched"), |b| {
+            b.iter(|| {
+                let rates = Rates {
+                    ax: &mut *ax,
+                    ay: &mut *ay,
+                    az: &mut *az,
+                    du: &mut *du,
+                };
+                black_box(momentum_energy_switched(
+                    &kernel, &bbox, state, &factors, grad, &alpha, &list, rates,
+                ))
+            })
+        });
+        if grad == Gradients::Iad {
+            // Both passes of the AV switches (div v, then grad div v and alpha).
+            let flow = FlowState::from(state);
+            let params = AvSwitchParams::default();
+            let mut div_v = vec![0.0; rho.len()];
+            let mut alpha = vec![params.alpha_min; rho.len()];
+            g.bench_function("av_switches_iad", |b| {
+                b.iter(|| {
+                    velocity_divergence(&kernel, &bbox, flow, grad, &list, &mut div_v, &mut []);
+                    update_alpha(
+                        &kernel, &bbox, flow, grad, &div_v, &params, 1e-4, &list, &mut alpha,
+                    );
+                    black_box(alpha[0])
+                })
+            });
+        }
     }
     g.finish();
 }

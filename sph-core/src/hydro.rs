@@ -12,7 +12,7 @@ use crate::timestep::TimestepParams;
 use crate::{CoreError, Particles};
 use sph_comm::{Communicator, ReduceOp, SerialComm};
 use sph_domain::{Domain, DomainConfig, SyncStats};
-use sph_gravity::{GravityField, GravityParams, GravityStats, TreeGravity};
+use sph_gravity::{Decomposition, DistributedGravity, GravityField, GravityParams, GravityStats};
 use sph_kernels::Kernel;
 use sph_tree::{BoundingBox, CompactNeighborList, Curve, NeighborStats, Octree};
 use std::ops::Range;
@@ -141,7 +141,8 @@ pub struct Hydro<K: Kernel, C: Communicator = SerialComm> {
     list: CompactNeighborList,
     factors: PairFactors,
     h_before: Vec<f64>,
-    gravity: Option<TreeGravity>,
+    gravity: Option<DistributedGravity>,
+    gravity_tree: Octree,
     field: GravityField,
     step: u64,
     t: f64,
@@ -202,10 +203,11 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             h_before: Vec::new(),
             gravity: config
                 .gravity
-                .map(TreeGravity::new)
+                .map(DistributedGravity::new)
                 .transpose()
                 .map_err(|e| CoreError::Invalid(format!("gravity: {e}")))?,
             field: GravityField::new(),
+            gravity_tree: Octree::default(),
             step: 0,
             t: t0,
             dt_prev: dt0,
@@ -376,10 +378,10 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         if self.gravity.is_some() {
             self.gravity_field(p, bbox, owned.clone(), step)?;
             let f = &self.field;
-            for i in owned.clone() {
-                p.ax[i] += f.ax[i];
-                p.ay[i] += f.ay[i];
-                p.az[i] += f.az[i];
+            for (k, i) in owned.clone().enumerate() {
+                p.ax[i] += f.ax[k];
+                p.ay[i] += f.ay[k];
+                p.az[i] += f.az[k];
             }
             max_acc = (owned.clone())
                 .map(|i| (p.ax[i] * p.ax[i] + p.ay[i] * p.ay[i] + p.az[i] * p.az[i]).sqrt())
@@ -492,29 +494,46 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         let Some(solver) = self.gravity.as_mut() else {
             return Ok(GravityStats::default());
         };
-        if self.domain.comm().size() > 1 {
-            return Err(CoreError::Invalid(
-                "self-gravity over several ranks is not available yet; run on one rank".into(),
-            ));
-        }
         if p.phi.len() != p.len() {
             return Err(CoreError::Invalid(
                 "self-gravity needs the potential field: build the particles with FieldSet { gravity: true, .. }".into(),
             ));
         }
+        // The gravity tree holds the owned particles only (halos are
+        // copies); on one rank that is the neighbour tree itself.
+        let r = owned.clone();
+        let tree = if owned.len() == p.len() {
+            &self.tree
+        } else {
+            self.gravity_tree.rebuild(
+                &self.domain.keys()[r.clone()],
+                &p.x[r.clone()],
+                &p.y[r.clone()],
+                &p.z[r.clone()],
+                self.config.bucket,
+            )?;
+            &self.gravity_tree
+        };
+        let dec = Decomposition {
+            bbox,
+            curve: self.config.curve,
+            key_start: self.domain.key_ranges(),
+            h_max: self.domain.h_limit(),
+        };
         let stats = solver
             .compute(
-                &self.tree,
-                bbox,
-                &p.x,
-                &p.y,
-                &p.z,
-                &p.m,
-                Some(&p.h),
+                self.domain.comm(),
+                dec,
+                tree,
+                &p.x[r.clone()],
+                &p.y[r.clone()],
+                &p.z[r.clone()],
+                &p.m[r.clone()],
+                Some(&p.h[r.clone()]),
                 &mut self.field,
             )
             .map_err(|e| CoreError::Invalid(format!("step {step}: gravity: {e}")))?;
-        p.phi[owned.clone()].copy_from_slice(&self.field.phi[owned]);
+        p.phi[owned].copy_from_slice(&self.field.phi);
         Ok(stats)
     }
 

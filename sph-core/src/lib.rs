@@ -50,6 +50,7 @@
 //! assert!(hydro.time() > first.dt);
 //! ```
 
+pub mod av_switch;
 pub mod conserved;
 pub mod density;
 pub mod eos;
@@ -63,6 +64,7 @@ pub mod neighbors;
 mod particles;
 pub mod timestep;
 
+pub use av_switch::AvSwitchParams;
 pub use conserved::Conserved;
 pub use eos::Eos;
 pub use error::CoreError;

@@ -2,8 +2,12 @@
 //! signal-velocity artificial viscosity, IAD or plain kernel gradients.
 //!
 //! With `A_ij(h_k) = C_k (x_j - x_i) W(r_ij, h_k)` (IAD) or
-//! `grad_i W(r_ij, h_k)` (plain), and `Pi'_ij = -alpha/2 v_sig w_ij` for
-//! approaching pairs (`w_ij = v_ij . x_ij / r_ij < 0`, `v_sig = c_i + c_j - 3 w_ij`):
+//! `grad_i W(r_ij, h_k)` (plain), and `Pi'_ij = -alpha_ij/2 v_sig w_ij` for
+//! approaching pairs (`w_ij = v_ij . x_ij / r_ij < 0`, `v_sig = c_i + c_j - 3 w_ij`),
+//! where the viscosity strength is a constant `alpha_ij = alpha`
+//! ([`momentum_energy`]) or the mean `alpha_ij = (alpha_i + alpha_j) / 2` of
+//! per-particle switches ([`momentum_energy_switched`], see
+//! [`av_switch`](crate::av_switch)), symmetric in `i, j` either way:
 //!
 //! ```text
 //! dv_i/dt = - sum_j m_j [ P_i/(Omega_i rho_i^2) A_ij(h_i) + P_j/(Omega_j rho_j^2) A_ij(h_j)
@@ -117,8 +121,9 @@ impl PairFactors {
     }
 }
 
-/// Computes accelerations and du/dt of every target of `nl`; `f` must have
-/// been filled from the same state.
+/// Computes accelerations and du/dt of every target of `nl` with a
+/// constant viscosity strength `alpha`; `f` must have been filled from the
+/// same state.
 pub fn momentum_energy<K: Kernel>(
     kernel: &K,
     bbox: &BoundingBox,
@@ -130,17 +135,50 @@ pub fn momentum_energy<K: Kernel>(
     out: Rates<'_>,
 ) -> MomentumStats {
     match gradients {
-        Gradients::Iad => pair_loop::<K, true>(kernel, bbox, s, f, alpha, nl, out),
-        Gradients::Kernel => pair_loop::<K, false>(kernel, bbox, s, f, alpha, nl, out),
+        Gradients::Iad => pair_loop::<K, true, false>(kernel, bbox, s, f, alpha, &[], nl, out),
+        Gradients::Kernel => pair_loop::<K, false, false>(kernel, bbox, s, f, alpha, &[], nl, out),
     }
 }
 
-fn pair_loop<K: Kernel, const IAD: bool>(
+/// As [`momentum_energy`], with a viscosity strength per particle: pair
+/// `i, j` uses `alpha_ij = (alpha_i + alpha_j) / 2`. `alpha` must cover
+/// every particle the lists reach (targets and halos), as the other state
+/// slices do. With all `alpha_i` equal to `a` the result is bit for bit
+/// that of [`momentum_energy`] with `a`.
+///
+/// # Panics
+/// If `alpha` is shorter than the density slice of `s`.
+pub fn momentum_energy_switched<K: Kernel>(
+    kernel: &K,
+    bbox: &BoundingBox,
+    s: HydroState<'_>,
+    f: &PairFactors,
+    gradients: Gradients,
+    alpha: &[f64],
+    nl: &CompactNeighborList,
+    out: Rates<'_>,
+) -> MomentumStats {
+    assert!(
+        alpha.len() >= s.rho.len(),
+        "alpha has {} values for {} particles",
+        alpha.len(),
+        s.rho.len()
+    );
+    match gradients {
+        Gradients::Iad => pair_loop::<K, true, true>(kernel, bbox, s, f, 0.0, alpha, nl, out),
+        Gradients::Kernel => pair_loop::<K, false, true>(kernel, bbox, s, f, 0.0, alpha, nl, out),
+    }
+}
+
+/// The pair loop; `SWITCHED` selects `alpha_ij = (alpha_per[i] +
+/// alpha_per[j]) / 2` over the constant `alpha` at compile time.
+fn pair_loop<K: Kernel, const IAD: bool, const SWITCHED: bool>(
     kernel: &K,
     bbox: &BoundingBox,
     s: HydroState<'_>,
     f: &PairFactors,
     alpha: f64,
+    alpha_per: &[f64],
     nl: &CompactNeighborList,
     out: Rates<'_>,
 ) -> MomentumStats {
@@ -165,6 +203,7 @@ fn pair_loop<K: Kernel, const IAD: bool>(
             let ki3 = norm * inv_hi * inv_hi * inv_hi;
             let ci = s.c[i];
             let (pre_i, inv_rho_i) = (f.pre[i], f.inv_rho[i]);
+            let alpha_i = if SWITCHED { alpha_per[i] } else { alpha };
             let ci_m = if IAD {
                 [
                     s.iad[0][i],
@@ -226,7 +265,12 @@ fn pair_loop<K: Kernel, const IAD: bool>(
                     let vsig = ci + s.c[j] - 3.0 * w.min(0.0);
                     vsig_max = vsig_max.max(vsig);
                     let visc = if w < 0.0 {
-                        -0.5 * alpha * vsig * w
+                        let alpha_ij = if SWITCHED {
+                            0.5 * (alpha_i + alpha_per[j])
+                        } else {
+                            alpha
+                        };
+                        -0.5 * alpha_ij * vsig * w
                     } else {
                         0.0
                     };

@@ -1,0 +1,528 @@
+//! Tests of the artificial-viscosity switches: exact IAD divergence of
+//! linear flows, the grad(div v) shock indicator, the growth and the
+//! exponential decay of alpha, its bounds, and momentum conservation with
+//! per-particle alpha.
+
+use proptest::prelude::*;
+use sph_core::av_switch::{
+    shock_indicator, update_alpha, velocity_divergence, AvSwitchParams, FlowState,
+};
+use sph_core::density::{density, Positions};
+use sph_core::iad::iad;
+use sph_core::momentum::{
+    momentum_energy, momentum_energy_switched, Gradients, HydroState, PairFactors, Rates,
+};
+use sph_core::{Eos, FieldSet, Particles};
+use sph_kernels::{Sinc, Tabulated};
+use sph_tree::{
+    apply_permutation, compute_keys, Boundary, BoundingBox, CompactNeighborList, Curve, KeySorter,
+    NeighborSearch, Octree,
+};
+
+struct Rng(u64);
+impl Rng {
+    fn uniform(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+fn kernel() -> Tabulated {
+    Tabulated::new(&Sinc::new(6.0).unwrap(), Tabulated::DEFAULT_POINTS).unwrap()
+}
+
+/// An n^3 lattice in the periodic box [-0.5, 0.5)^3 (or an open box when
+/// `periodic` is false), each particle moved by up to `jitter` lattice
+/// spacings, sorted along the curve, with h for about `ng` neighbours, unit
+/// total mass, density and IAD computed and symmetric neighbour lists.
+struct Setup {
+    p: Particles,
+    bbox: BoundingBox,
+    list: CompactNeighborList,
+    keys: Vec<u64>,
+}
+
+fn lattice(n: usize, jitter: f64, ng: f64, seed: u64) -> Setup {
+    let mut rng = Rng(seed);
+    let np = n * n * n;
+    let mut p = Particles::new(np, FieldSet::default());
+    let dx = 1.0 / n as f64;
+    let bbox = BoundingBox::cube(-0.5, 0.5, Boundary::Periodic).unwrap();
+    for i in 0..np {
+        let c = [i % n, i / n % n, i / (n * n)];
+        let mut q = [0.0; 3];
+        for k in 0..3 {
+            q[k] = (c[k] as f64 + 0.5) * dx - 0.5 + jitter * dx * (rng.uniform() - 0.5);
+        }
+        let q = bbox.wrap(q);
+        (p.x[i], p.y[i], p.z[i]) = (q[0], q[1], q[2]);
+        p.m[i] = 1.0 / np as f64;
+        p.u[i] = 1.0;
+        p.h[i] = 0.5 * (3.0 * ng / (4.0 * std::f64::consts::PI * np as f64)).cbrt();
+    }
+    let mut keys = Vec::new();
+    compute_keys(&bbox, Curve::Hilbert, &p.x, &p.y, &p.z, &mut keys);
+    let mut perm = Vec::new();
+    KeySorter::new().sort(&keys, None, &mut perm);
+    p.reorder(&perm, &mut Vec::new());
+    apply_permutation(&perm, &mut keys, &mut Vec::new());
+    let mut s = Setup {
+        p,
+        bbox,
+        list: CompactNeighborList::new(),
+        keys,
+    };
+    refresh(&mut s);
+    s
+}
+
+/// Neighbour lists for the current h, density, IAD and the EOS.
+fn refresh(s: &mut Setup) {
+    let p = &mut s.p;
+    let tree = Octree::build(&s.keys, &p.x, &p.y, &p.z, 16).unwrap();
+    let search = NeighborSearch {
+        symmetric: true,
+        ..Default::default()
+    };
+    search
+        .find_compact(
+            &tree,
+            &s.bbox,
+            &p.x,
+            &p.y,
+            &p.z,
+            &p.h,
+            0..p.len(),
+            &mut s.list,
+        )
+        .unwrap();
+    let pos = Positions {
+        x: &p.x,
+        y: &p.y,
+        z: &p.z,
+        h: &p.h,
+        m: &p.m,
+    };
+    density(&kernel(), &s.bbox, pos, &s.list, &mut p.rho, &mut p.omega);
+    iad(&kernel(), &s.bbox, pos, &p.rho, &s.list, &mut p.iad).unwrap();
+    Eos::IdealGas { gamma: 5.0 / 3.0 }.apply(&p.rho, &p.u, None, &mut p.p, &mut p.c);
+}
+
+fn flow(p: &Particles) -> FlowState<'_> {
+    FlowState {
+        pos: Positions {
+            x: &p.x,
+            y: &p.y,
+            z: &p.z,
+            h: &p.h,
+            m: &p.m,
+        },
+        vx: &p.vx,
+        vy: &p.vy,
+        vz: &p.vz,
+        rho: &p.rho,
+        c: &p.c,
+        iad: std::array::from_fn(|k| p.iad[k].as_slice()),
+    }
+}
+
+fn divergence(s: &Setup, gradients: Gradients) -> (Vec<f64>, Vec<f64>) {
+    let n = s.p.len();
+    let (mut div_v, mut curl_v) = (vec![0.0; n], vec![0.0; n]);
+    velocity_divergence(
+        &kernel(),
+        &s.bbox,
+        flow(&s.p),
+        gradients,
+        &s.list,
+        &mut div_v,
+        &mut curl_v,
+    );
+    (div_v, curl_v)
+}
+
+fn indicator(s: &Setup, gradients: Gradients, div_v: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let n = s.p.len();
+    let (mut alpha_loc, mut v_sig) = (vec![0.0; n], vec![0.0; n]);
+    shock_indicator(
+        &kernel(),
+        &s.bbox,
+        flow(&s.p),
+        gradients,
+        div_v,
+        &AvSwitchParams::default(),
+        &s.list,
+        &mut alpha_loc,
+        &mut v_sig,
+    );
+    (alpha_loc, v_sig)
+}
+
+/// `steps` updates of alpha with time step `dt` (velocities fixed).
+fn evolve_alpha(s: &Setup, params: &AvSwitchParams, alpha: &mut [f64], dt: f64, steps: usize) {
+    let (div_v, _) = divergence(s, Gradients::Iad);
+    for _ in 0..steps {
+        update_alpha(
+            &kernel(),
+            &s.bbox,
+            flow(&s.p),
+            Gradients::Iad,
+            &div_v,
+            params,
+            dt,
+            &s.list,
+            alpha,
+        );
+    }
+}
+
+/// A 12^3 lattice in an open box (a linear velocity field `v = v0 + G x`
+/// is not periodic) with `d_a v_b = G[a][b]`.
+fn linear_setup(jitter: f64, seed: u64) -> (Setup, [[f64; 3]; 3]) {
+    let mut s = lattice(12, jitter, 100.0, seed);
+    // Open box: particles near the faces have one-sided neighbourhoods,
+    // which IAD handles exactly too.
+    s.bbox = BoundingBox::cube(-0.6, 0.6, Boundary::Open).unwrap();
+    compute_keys(&s.bbox, Curve::Hilbert, &s.p.x, &s.p.y, &s.p.z, &mut s.keys);
+    let mut perm = Vec::new();
+    KeySorter::new().sort(&s.keys, None, &mut perm);
+    s.p.reorder(&perm, &mut Vec::new());
+    apply_permutation(&perm, &mut s.keys, &mut Vec::new());
+    refresh(&mut s);
+    // d_a v_b = g[a][b]
+    let g = [[0.7, -1.3, 0.4], [2.1, -0.9, 0.25], [-0.6, 1.1, -1.7]];
+    for i in 0..s.p.len() {
+        let x = [s.p.x[i], s.p.y[i], s.p.z[i]];
+        let v: [f64; 3] =
+            std::array::from_fn(|b| 0.3 + g[0][b] * x[0] + g[1][b] * x[1] + g[2][b] * x[2]);
+        (s.p.vx[i], s.p.vy[i], s.p.vz[i]) = (v[0], v[1], v[2]);
+    }
+    (s, g)
+}
+
+#[test]
+fn iad_divergence_and_curl_of_linear_field_are_exact() {
+    for jitter in [0.0, 0.6] {
+        let (s, g) = linear_setup(jitter, 11);
+        let div = g[0][0] + g[1][1] + g[2][2];
+        let curl = [g[1][2] - g[2][1], g[2][0] - g[0][2], g[0][1] - g[1][0]];
+        let curl = (curl[0] * curl[0] + curl[1] * curl[1] + curl[2] * curl[2]).sqrt();
+        let (div_v, curl_v) = divergence(&s, Gradients::Iad);
+        let mut worst: f64 = 0.0;
+        for i in 0..s.p.len() {
+            worst = worst
+                .max((div_v[i] - div).abs())
+                .max((curl_v[i] - curl).abs());
+        }
+        assert!(worst < 1e-10, "jitter {jitter}: max error {worst:e}");
+        // Plain kernel gradients are only approximate (boundary particles
+        // miss half their neighbours).
+        let (div_k, _) = divergence(&s, Gradients::Kernel);
+        let err = (0..s.p.len())
+            .map(|i| (div_k[i] - div).abs())
+            .fold(0.0, f64::max);
+        assert!(err > 1e-3, "kernel divergence error only {err:e}");
+    }
+}
+
+#[test]
+fn indicator_vanishes_for_linear_field() {
+    let (mut s, _) = linear_setup(0.6, 12);
+    // Make the flow compressive everywhere (div v = -2.4 < 0).
+    for i in 0..s.p.len() {
+        s.p.vx[i] -= s.p.x[i];
+    }
+    let (div_v, _) = divergence(&s, Gradients::Iad);
+    assert!(div_v.iter().all(|&d| d < 0.0));
+    let (alpha_loc, _) = indicator(&s, Gradients::Iad, &div_v);
+    let worst = alpha_loc.iter().cloned().fold(0.0, f64::max);
+    assert!(worst < 1e-10, "alpha_loc up to {worst:e} in a linear flow");
+}
+
+/// A cold gas converging on the plane x = 0 with v_x = -V tanh(x / L).
+fn converging(n: usize, jitter: f64, width: f64) -> Setup {
+    let mut s = lattice(n, jitter, 100.0, 5);
+    for i in 0..s.p.len() {
+        s.p.vx[i] = -(s.p.x[i] / width).tanh();
+        s.p.u[i] = 1e-6;
+    }
+    refresh(&mut s);
+    s
+}
+
+#[test]
+fn indicator_is_positive_in_converging_nonlinear_flow() {
+    let s = converging(16, 0.3, 0.1);
+    for gradients in [Gradients::Iad, Gradients::Kernel] {
+        let (div_v, _) = divergence(&s, gradients);
+        let (alpha_loc, _) = indicator(&s, gradients, &div_v);
+        let mut compressive = 0;
+        for i in 0..s.p.len() {
+            let a = alpha_loc[i];
+            assert!((0.0..=1.0).contains(&a), "alpha_loc = {a}");
+            if div_v[i] < 0.0 {
+                compressive += 1;
+                assert!(a > 0.0, "particle at x = {}: alpha_loc = 0", s.p.x[i]);
+            } else {
+                assert_eq!(a, 0.0);
+            }
+        }
+        assert!(compressive > s.p.len() / 4);
+    }
+}
+
+#[test]
+fn alpha_rises_in_compression_and_decays_where_expanding() {
+    let s = converging(16, 0.3, 0.1);
+    let params = AvSwitchParams::default();
+    let mut alpha = vec![params.alpha_min; s.p.len()];
+    evolve_alpha(&s, &params, &mut alpha, 1e-3, 1);
+    // The steepening flanks of the compression switch to nearly alpha_max.
+    let (div_v, _) = divergence(&s, Gradients::Iad);
+    let max = alpha.iter().cloned().fold(0.0, f64::max);
+    assert!(max > 0.9 * params.alpha_max, "max alpha {max}");
+    let near = (0..s.p.len())
+        .filter(|&i| div_v[i] < 0.0 && alpha[i] > 0.5)
+        .count();
+    assert!(near > 100, "only {near} particles above 0.5");
+    // Where the flow expands (around x = +-0.5) alpha stays at alpha_min.
+    for i in 0..s.p.len() {
+        if div_v[i] > 0.0 {
+            assert_eq!(alpha[i], params.alpha_min);
+        }
+    }
+}
+
+#[test]
+fn alpha_decays_exponentially_in_uniform_flow() {
+    let mut s = lattice(12, 0.6, 100.0, 21);
+    let mut rng = Rng(4);
+    for i in 0..s.p.len() {
+        (s.p.vx[i], s.p.vy[i], s.p.vz[i]) = (0.3, -0.2, 0.1);
+        s.p.u[i] = 1.0 + rng.uniform();
+    }
+    refresh(&mut s);
+    let params = AvSwitchParams::default();
+    let (div_v, _) = divergence(&s, Gradients::Iad);
+    assert!(div_v.iter().all(|&d| d == 0.0));
+    let (alpha_loc, v_sig) = indicator(&s, Gradients::Iad, &div_v);
+    assert!(alpha_loc.iter().all(|&a| a == 0.0));
+    // No approaching pairs: v_sig = c_i + max_j c_j.
+    for i in 0..s.p.len() {
+        let cmax = s
+            .list
+            .neighbors(i)
+            .filter(|&j| j != i)
+            .map(|j| s.p.c[j])
+            .fold(0.0, f64::max);
+        assert_eq!(v_sig[i], s.p.c[i] + cmax);
+    }
+    let mut alpha: Vec<f64> = (0..s.p.len()).map(|_| 0.2 + 0.8 * rng.uniform()).collect();
+    let start = alpha.clone();
+    let (dt, steps) = (1e-2, 10);
+    evolve_alpha(&s, &params, &mut alpha, dt, steps);
+    let mut worst: f64 = 0.0;
+    let mut decayed = 0.0;
+    for i in 0..s.p.len() {
+        let tau = s.p.h[i] / (params.decay * v_sig[i]);
+        let expected =
+            params.alpha_min + (start[i] - params.alpha_min) * (-(steps as f64) * dt / tau).exp();
+        worst = worst.max((alpha[i] - expected).abs() / (expected - params.alpha_min));
+        decayed += (start[i] - alpha[i]) / (start[i] - params.alpha_min);
+    }
+    assert!(worst < 1e-12, "relative deviation {worst:e}");
+    // The decay is substantial over these steps (not a trivial pass).
+    let mean = decayed / s.p.len() as f64;
+    assert!(mean > 0.2 && mean < 0.9, "mean decayed fraction {mean}");
+    // Long after, alpha sits at alpha_min.
+    evolve_alpha(&s, &params, &mut alpha, 1e3, 1);
+    assert!(alpha.iter().all(|&a| a == params.alpha_min));
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(8))]
+
+    /// Whatever the flow, the starting alpha or the time step, alpha stays
+    /// in [alpha_min, alpha_max] and is finite.
+    #[test]
+    fn alpha_stays_in_bounds(
+        seed in any::<u64>(),
+        dt in prop_oneof![Just(0.0), 1e-6..1e-2f64, 1e-2..1e3f64],
+        iad_grad in any::<bool>(),
+        amp in 0.01..10.0f64,
+    ) {
+        let mut s = lattice(8, 0.8, 50.0, seed);
+        let mut rng = Rng(seed ^ 0x5eed);
+        for i in 0..s.p.len() {
+            s.p.vx[i] = amp * (rng.uniform() - 0.5);
+            s.p.vy[i] = amp * (rng.uniform() - 0.5);
+            s.p.vz[i] = amp * (rng.uniform() - 0.5);
+            s.p.u[i] = 0.01 + rng.uniform();
+        }
+        refresh(&mut s);
+        let params = AvSwitchParams {
+            alpha_min: 0.01 + 0.2 * rng.uniform(),
+            alpha_max: 0.5 + rng.uniform(),
+            ..Default::default()
+        };
+        let gradients = if iad_grad { Gradients::Iad } else { Gradients::Kernel };
+        let (div_v, _) = divergence(&s, gradients);
+        // Starting values inside and outside the bounds.
+        let mut alpha: Vec<f64> = (0..s.p.len()).map(|_| 2.0 * rng.uniform() - 0.5).collect();
+        for _ in 0..3 {
+            update_alpha(&kernel(), &s.bbox, flow(&s.p), gradients, &div_v, &params, dt, &s.list, &mut alpha);
+            for &a in &alpha {
+                prop_assert!(a >= params.alpha_min && a <= params.alpha_max, "alpha = {}", a);
+            }
+        }
+    }
+
+    /// The relaxation alone: bounded, monotone towards its target, and a
+    /// jump exactly to alpha_loc when that is larger.
+    #[test]
+    fn advance_is_bounded_and_monotone(
+        alpha in 0.05..1.0f64,
+        alpha_loc in 0.0..1.0f64,
+        tau in 1e-6..1e3f64,
+        dt in 0.0..1e3f64,
+    ) {
+        let p = AvSwitchParams::default();
+        let a = p.advance(alpha, alpha_loc, tau, dt);
+        prop_assert!(a >= p.alpha_min && a <= p.alpha_max);
+        if alpha_loc >= alpha {
+            prop_assert_eq!(a, alpha_loc);
+        } else {
+            let target = alpha_loc.max(p.alpha_min);
+            prop_assert!(a <= alpha && a >= target);
+        }
+    }
+
+    /// Per-particle alpha keeps the pair forces antisymmetric: one force
+    /// evaluation changes the total momentum by round-off only, and total
+    /// energy is still conserved by the rates.
+    #[test]
+    fn switched_viscosity_conserves_momentum_and_energy(seed in any::<u64>(), iad_grad in any::<bool>()) {
+        let mut s = lattice(10, 0.8, 60.0, seed);
+        let mut rng = Rng(seed ^ 0xABCD);
+        for i in 0..s.p.len() {
+            s.p.vx[i] = rng.uniform() - 0.5;
+            s.p.vy[i] = rng.uniform() - 0.5;
+            s.p.vz[i] = rng.uniform() - 0.5;
+            s.p.u[i] = 1.0 + rng.uniform();
+            s.p.h[i] *= 1.0 + 0.5 * (rng.uniform() - 0.5);
+        }
+        refresh(&mut s);
+        let alpha: Vec<f64> = (0..s.p.len()).map(|_| 0.05 + 0.95 * rng.uniform()).collect();
+        let gradients = if iad_grad { Gradients::Iad } else { Gradients::Kernel };
+        forces(&mut s, gradients, Some(&alpha));
+        let p = &s.p;
+        let mut mom = [0.0; 3];
+        let mut scale = 0.0;
+        let mut de = 0.0;
+        let mut de_scale = 0.0;
+        for i in 0..p.len() {
+            let a = [p.ax[i], p.ay[i], p.az[i]];
+            for k in 0..3 {
+                mom[k] += p.m[i] * a[k];
+                scale += p.m[i] * a[k].abs();
+            }
+            let work = p.m[i] * (p.vx[i] * a[0] + p.vy[i] * a[1] + p.vz[i] * a[2]);
+            de += work + p.m[i] * p.du[i];
+            de_scale += work.abs() + (p.m[i] * p.du[i]).abs();
+        }
+        for k in 0..3 {
+            prop_assert!(mom[k].abs() < 1e-13 * scale, "momentum {:e} vs {:e}", mom[k], scale);
+        }
+        prop_assert!(de.abs() < 1e-12 * de_scale, "energy rate {:e} vs {:e}", de, de_scale);
+    }
+}
+
+/// Forces with a constant alpha = 1 (`None`) or per-particle alpha.
+fn forces(s: &mut Setup, gradients: Gradients, alpha: Option<&[f64]>) {
+    let p = &mut s.p;
+    let state = HydroState {
+        pos: Positions {
+            x: &p.x,
+            y: &p.y,
+            z: &p.z,
+            h: &p.h,
+            m: &p.m,
+        },
+        vx: &p.vx,
+        vy: &p.vy,
+        vz: &p.vz,
+        rho: &p.rho,
+        p: &p.p,
+        c: &p.c,
+        omega: &p.omega,
+        iad: std::array::from_fn(|k| p.iad[k].as_slice()),
+    };
+    let rates = Rates {
+        ax: &mut p.ax,
+        ay: &mut p.ay,
+        az: &mut p.az,
+        du: &mut p.du,
+    };
+    let mut factors = PairFactors::default();
+    factors.fill(&state);
+    let k = kernel();
+    match alpha {
+        None => momentum_energy(&k, &s.bbox, state, &factors, gradients, 0.7, &s.list, rates),
+        Some(a) => {
+            momentum_energy_switched(&k, &s.bbox, state, &factors, gradients, a, &s.list, rates)
+        }
+    };
+}
+
+#[test]
+fn equal_switches_reproduce_constant_alpha_bit_for_bit() {
+    let mut s = lattice(10, 0.8, 60.0, 99);
+    let mut rng = Rng(17);
+    for i in 0..s.p.len() {
+        s.p.vx[i] = rng.uniform() - 0.5;
+        s.p.vy[i] = rng.uniform() - 0.5;
+        s.p.vz[i] = rng.uniform() - 0.5;
+    }
+    refresh(&mut s);
+    for gradients in [Gradients::Iad, Gradients::Kernel] {
+        forces(&mut s, gradients, None);
+        let constant = (
+            s.p.ax.clone(),
+            s.p.ay.clone(),
+            s.p.az.clone(),
+            s.p.du.clone(),
+        );
+        let alpha = vec![0.7; s.p.len()];
+        forces(&mut s, gradients, Some(&alpha));
+        assert_eq!(constant.0, s.p.ax);
+        assert_eq!(constant.1, s.p.ay);
+        assert_eq!(constant.2, s.p.az);
+        assert_eq!(constant.3, s.p.du);
+        // And a different alpha changes the viscous terms.
+        let alpha = vec![0.2; s.p.len()];
+        forces(&mut s, gradients, Some(&alpha));
+        assert_ne!(constant.3, s.p.du);
+    }
+}
+
+#[test]
+fn results_do_not_depend_on_thread_count() {
+    let s = converging(10, 0.5, 0.1);
+    let params = AvSwitchParams::default();
+    let run = || {
+        let (div_v, curl_v) = divergence(&s, Gradients::Iad);
+        let mut alpha = vec![params.alpha_min; s.p.len()];
+        evolve_alpha(&s, &params, &mut alpha, 1e-3, 2);
+        (div_v, curl_v, alpha)
+    };
+    let many = run();
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap()
+        .install(run);
+    assert_eq!(many, one);
+}
