@@ -1,0 +1,268 @@
+//! The decomposition on 1-4 in-process ranks (`sph_comm::run_ranks`):
+//! after every sync each particle is owned exactly once, by the rank whose
+//! key range holds its key; the local arrays are in (key, id) order; every
+//! particle within reach of an owned one is present locally (checked by
+//! brute force over the global set); halo exchange delivers the owners'
+//! values; and all of this survives particles moving across ranks and
+//! across periodic boundaries.
+
+use proptest::prelude::*;
+use sph_comm::{run_ranks, Communicator};
+use sph_domain::{Domain, DomainConfig, ParticleFields};
+use sph_tree::{compute_keys, Boundary, BoundingBox, Curve};
+use std::ops::Range;
+
+/// Minimal container: id, position, h and one carried value.
+#[derive(Debug, Default, Clone)]
+struct Cloud {
+    id: Vec<u64>,
+    x: Vec<f64>,
+    y: Vec<f64>,
+    z: Vec<f64>,
+    h: Vec<f64>,
+    q: Vec<f64>,
+}
+
+impl ParticleFields for Cloud {
+    fn len(&self) -> usize {
+        self.id.len()
+    }
+    fn ids(&self) -> &[u64] {
+        &self.id
+    }
+    fn positions(&self) -> [&[f64]; 3] {
+        [&self.x, &self.y, &self.z]
+    }
+    fn smoothing_lengths(&self) -> &[f64] {
+        &self.h
+    }
+    fn packed_words(&self) -> usize {
+        6
+    }
+    fn pack(&self, i: usize, out: &mut Vec<u64>) {
+        out.extend([
+            self.id[i],
+            self.x[i].to_bits(),
+            self.y[i].to_bits(),
+            self.z[i].to_bits(),
+            self.h[i].to_bits(),
+            self.q[i].to_bits(),
+        ]);
+    }
+    fn push_packed(&mut self, w: &[u64]) {
+        self.id.push(w[0]);
+        for (v, &b) in [
+            &mut self.x,
+            &mut self.y,
+            &mut self.z,
+            &mut self.h,
+            &mut self.q,
+        ]
+        .into_iter()
+        .zip(&w[1..])
+        {
+            v.push(f64::from_bits(b));
+        }
+    }
+    fn keep(&mut self, r: Range<usize>) {
+        self.id = self.id[r.clone()].to_vec();
+        for v in [
+            &mut self.x,
+            &mut self.y,
+            &mut self.z,
+            &mut self.h,
+            &mut self.q,
+        ] {
+            *v = v[r.clone()].to_vec();
+        }
+    }
+    fn reorder(&mut self, perm: &[u32], _scratch: &mut Vec<u64>) {
+        self.id = perm.iter().map(|&p| self.id[p as usize]).collect();
+        for v in [
+            &mut self.x,
+            &mut self.y,
+            &mut self.z,
+            &mut self.h,
+            &mut self.q,
+        ] {
+            *v = perm.iter().map(|&p| v[p as usize]).collect();
+        }
+    }
+}
+
+struct Rng(u64);
+impl Rng {
+    fn uniform(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// `n` particles in the unit cube, half of them in a tight clump, h in
+/// [0.02, 0.06]; the value carried is a function of the id.
+fn global_cloud(n: usize, seed: u64) -> Cloud {
+    let mut rng = Rng(seed);
+    let mut c = Cloud::default();
+    for i in 0..n as u64 {
+        let clump = i % 2 == 0;
+        let mut p = || {
+            if clump {
+                0.7 + 0.1 * rng.uniform()
+            } else {
+                rng.uniform()
+            }
+        };
+        let (x, y, z) = (p(), p(), p());
+        c.push_packed(&[
+            i,
+            x.to_bits(),
+            y.to_bits(),
+            z.to_bits(),
+            (0.02 + 0.04 * rng.uniform()).to_bits(),
+            value(i).to_bits(),
+        ]);
+    }
+    c
+}
+
+fn value(id: u64) -> f64 {
+    (id as f64).sqrt() + 1.0
+}
+
+/// Checks the invariants on every rank; returns the global owned ids.
+fn check_sync<C: Communicator>(
+    comm: &C,
+    domain: &Domain<C>,
+    local: &Cloud,
+    global: &Cloud,
+    bbox: &BoundingBox,
+) -> Vec<u64> {
+    let owned = domain.owned();
+    let rank = comm.rank();
+    // Keys ascending (ties by id) and owned keys within this rank's range.
+    let keys = domain.keys();
+    assert_eq!(keys.len(), local.len());
+    for w in 1..keys.len() {
+        assert!(
+            (keys[w - 1], local.id[w - 1]) < (keys[w], local.id[w]),
+            "rank {rank}: local order broken at {w}"
+        );
+    }
+    let ranges = domain.key_ranges();
+    for i in owned.clone() {
+        assert!(ranges[rank] <= keys[i] && keys[i] < ranges[rank + 1]);
+    }
+    let mut mine = Vec::new();
+    compute_keys(
+        bbox,
+        Curve::Hilbert,
+        &local.x,
+        &local.y,
+        &local.z,
+        &mut mine,
+    );
+    assert_eq!(mine, keys, "rank {rank}: keys do not match the positions");
+    // Every particle within 2 max(h_i, h_j) of an owned one is present.
+    let present: std::collections::HashSet<u64> = local.id.iter().copied().collect();
+    for i in owned.clone() {
+        let pi = [local.x[i], local.y[i], local.z[i]];
+        for j in 0..global.len() {
+            let pj = [global.x[j], global.y[j], global.z[j]];
+            let reach = 2.0 * local.h[i].max(global.h[j]);
+            if bbox.distance2(pi, pj) < reach * reach {
+                assert!(
+                    present.contains(&global.id[j]),
+                    "rank {rank}: particle {} within reach of {} is missing",
+                    global.id[j],
+                    local.id[i]
+                );
+            }
+        }
+    }
+    let ids: Vec<u64> = local.id[owned].to_vec();
+    let mut all = comm.all_gather_v(&ids).unwrap().data;
+    all.sort_unstable();
+    all
+}
+
+/// Distributes `global` over `ranks`, syncs, moves every particle by a
+/// random displacement (wrapped on periodic axes), syncs again, and checks
+/// the invariants and a halo exchange after each sync.
+fn run(ranks: usize, n: usize, seed: u64, boundary: Boundary) {
+    let global0 = global_cloud(n, seed);
+    run_ranks(ranks, |comm| {
+        let mut bbox = BoundingBox::cube(0.0, 1.0, boundary).unwrap();
+        let config = DomainConfig {
+            bucket: 32,
+            ..DomainConfig::default()
+        };
+        let mut domain = Domain::new(&comm, config).unwrap();
+        // Start from an arbitrary split: every rank-th particle.
+        let mut local = Cloud::default();
+        let mut buf = Vec::new();
+        for i in (comm.rank()..n).step_by(ranks) {
+            buf.clear();
+            global0.pack(i, &mut buf);
+            local.push_packed(&buf);
+        }
+        let mut global = global0.clone();
+        let mut rng = Rng(seed ^ 0x5555);
+        for round in 0..3 {
+            domain.sync(&mut local, &mut bbox).unwrap();
+            let ids = check_sync(domain.comm(), &domain, &local, &global, &bbox);
+            assert_eq!(ids, (0..n as u64).collect::<Vec<_>>(), "round {round}: ids");
+            // Halo exchange: clobber the halos' values, exchange, compare.
+            let owned = domain.owned();
+            for i in (0..local.len()).filter(|i| !owned.contains(i)) {
+                local.q[i] = -1.0;
+            }
+            domain.exchange(&mut [local.q.as_mut_slice()]).unwrap();
+            for i in 0..local.len() {
+                assert_eq!(local.q[i], value(local.id[i]), "round {round}: halo value");
+            }
+            // Move everything (the same displacement on every rank, by id).
+            let shift = |id: u64, k: u64| {
+                let mut r = Rng(seed ^ id.wrapping_mul(31) ^ (k << 40) ^ (round as u64) << 50);
+                0.3 * (r.uniform() - 0.5)
+            };
+            for c in [&mut local, &mut global] {
+                for i in 0..c.len() {
+                    let p = [
+                        c.x[i] + shift(c.id[i], 0),
+                        c.y[i] + shift(c.id[i], 1),
+                        c.z[i] + shift(c.id[i], 2),
+                    ];
+                    let w = bbox.wrap(p);
+                    (c.x[i], c.y[i], c.z[i]) = (w[0], w[1], w[2]);
+                }
+            }
+            let _ = rng.uniform();
+        }
+    });
+}
+
+#[test]
+fn periodic_box_on_1_to_4_ranks() {
+    for ranks in 1..=4 {
+        run(ranks, 1500, 11 + ranks as u64, Boundary::Periodic);
+    }
+}
+
+#[test]
+fn open_box_on_2_and_3_ranks() {
+    for ranks in [2, 3] {
+        run(ranks, 1200, 5 + ranks as u64, Boundary::Open);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(8))]
+    #[test]
+    fn any_seed_any_rank_count(seed in any::<u64>(), ranks in 1usize..=4, periodic in any::<bool>()) {
+        let b = if periodic { Boundary::Periodic } else { Boundary::Open };
+        run(ranks, 600, seed, b);
+    }
+}
