@@ -18,7 +18,7 @@ fn lattice(side: usize, rank: usize, ranks: usize) -> Points {
     for i in (rank..n).step_by(ranks) {
         let c = [i % side, i / side % side, i / (side * side)];
         let jitter = |k: usize| ((i * 2654435761 + k * 97) % 1000) as f64 * 1e-4;
-        let pos = [0, 1, 2].map(|k| ((c[k] as f64 + 0.25 + 0.5 * jitter(k)) / side as f64));
+        let pos = [0, 1, 2].map(|k| (c[k] as f64 + 0.25 + 0.5 * jitter(k)) / side as f64);
         p.push(i as u64, pos, h);
     }
     p
