@@ -22,12 +22,19 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 /// (case, particles per side, steps)
-const CASES: [(&str, usize, u64); 4] = [
+const CASES: [(&str, usize, u64); 5] = [
     ("sedov", 24, 20),
     ("square-patch", 20, 20),
     ("noh", 20, 20),
     ("drift", 16, 30),
+    ("evrard", 16, 30),
 ];
+
+/// Cases that cannot be bit-identical across rank counts: self-gravity
+/// applies remote ranks' nodes as multipoles accepted for the receiving
+/// rank's whole domain, so the tree approximation (not the physics)
+/// depends on the decomposition. Their outputs are compared to a bound.
+const APPROXIMATE: [&str; 1] = ["evrard"];
 const TIMEOUT: Duration = Duration::from_secs(600);
 
 fn main() {
@@ -52,6 +59,7 @@ fn scene(case: &str) -> Scene {
         "sedov" => cases::sedov::setup(*side, config).unwrap(),
         "square-patch" => cases::square_patch::setup(*side, config).unwrap(),
         "noh" => cases::noh::setup(*side, config).unwrap(),
+        "evrard" => cases::evrard::setup(*side, config).unwrap(),
         "drift" => {
             // Uniform warm gas moving as a whole through the periodic box.
             let mut s = cases::sedov::setup(*side, config).unwrap();
@@ -165,6 +173,24 @@ fn launcher() {
             let want = std::fs::read(reference.join(file)).expect("reference output");
             for (label, dir) in &dirs[1..] {
                 let got = std::fs::read(dir.join(file)).expect("output");
+                if APPROXIMATE.contains(&case) {
+                    // Same bits within one rank (threads); across ranks the
+                    // forces differ by the tree's own error (p99 <= 1e-3
+                    // against direct summation), so that bounds the state.
+                    let bound = if label.starts_with("serial") {
+                        0.0
+                    } else {
+                        1e-3
+                    };
+                    let worst = max_relative_difference(&want, &got);
+                    println!("{case} {label} {file}: largest relative difference {worst:.2e}");
+                    if worst > bound {
+                        failures.push(format!(
+                            "{case}: {file} of {label} differs from serial-1t by {worst:e} (bound {bound:e})"
+                        ));
+                    }
+                    continue;
+                }
                 if got != want {
                     failures.push(format!(
                         "{case}: {file} of {label} differs from serial-1t{}",
@@ -223,17 +249,69 @@ fn check_migration(dir: &Path, n: usize) -> Result<(), String> {
             "gas moved only {travelled} in x: too little migration"
         ));
     }
-    for k in 6..9 {
+    // Columns: step, t, dt, E_kin, E_int, E_grav, E_tot, px, py, pz, ...
+    for k in 7..10 {
         let rel = (last[k] - first[k]).abs() / 3.0;
         if rel > 1e-12 {
-            return Err(format!("momentum component {} changed by {rel:e}", k - 6));
+            return Err(format!("momentum component {} changed by {rel:e}", k - 7));
         }
     }
-    let de = (last[5] - first[5]).abs() / first[5];
+    let de = (last[6] - first[6]).abs() / first[6];
     if de > 1e-6 {
         return Err(format!("total energy changed by {de:e}"));
     }
     Ok(())
+}
+
+/// Columns compared for the approximate cases: the physical state and the
+/// energies, each relative to its largest magnitude in the reference.
+/// (Momenta of a gravity run are tree-force round-off, ~1e-6 of m|v|,
+/// different for every decomposition; they are not compared.)
+const COMPARED: [&str; 13] = [
+    "t", "dt", "E_kin", "E_int", "E_grav", "E_tot", "x", "y", "z", "h", "u", "rho", "vx",
+];
+
+/// Largest `max |a - b| / max |a|` over the compared columns of two CSV
+/// files of the same shape (infinite if the shapes differ).
+fn max_relative_difference(a: &[u8], b: &[u8]) -> f64 {
+    let parse = |t: &[u8]| -> (Vec<String>, Vec<Vec<f64>>) {
+        let text = String::from_utf8_lossy(t).to_string();
+        let mut lines = text.lines();
+        let header = lines
+            .next()
+            .unwrap_or("")
+            .split(',')
+            .map(str::to_string)
+            .collect();
+        let rows = lines
+            .map(|l| {
+                l.split(',')
+                    .map(|v| v.parse().unwrap_or(f64::NAN))
+                    .collect()
+            })
+            .collect();
+        (header, rows)
+    };
+    let ((ha, ra), (hb, rb)) = (parse(a), parse(b));
+    if ha != hb || ra.len() != rb.len() || ra.iter().zip(&rb).any(|(x, y)| x.len() != y.len()) {
+        return f64::INFINITY;
+    }
+    let mut worst: f64 = 0.0;
+    for (c, name) in ha.iter().enumerate() {
+        if !COMPARED.contains(&name.as_str()) {
+            continue;
+        }
+        let scale = ra.iter().map(|r| r[c].abs()).fold(0.0, f64::max);
+        let diff = ra
+            .iter()
+            .zip(&rb)
+            .map(|(x, y)| (x[c] - y[c]).abs())
+            .fold(0.0, f64::max);
+        if scale > 0.0 {
+            worst = worst.max(diff / scale);
+        }
+    }
+    worst
 }
 
 fn first_difference(a: &[u8], b: &[u8]) -> String {
