@@ -300,11 +300,17 @@ fn render_energy(
                 colour.stroke_width(2),
             ))?
             .label(name)
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], colour.stroke_width(2)));
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 24, y)], colour.stroke_width(2))
+            });
     }
     for &(name, colour, points) in reference {
         chart
-            .draw_series(points.iter().map(|&xy| Circle::new(xy, 7, colour.stroke_width(2))))?
+            .draw_series(
+                points
+                    .iter()
+                    .map(|&xy| Circle::new(xy, 7, colour.stroke_width(2))),
+            )?
             .label(name)
             .legend(move |(x, y)| Circle::new((x + 12, y), 6, colour.stroke_width(2)));
     }

@@ -126,7 +126,11 @@ fn interpolate(samples: &[[f64; 4]], t: f64) -> [f64; 3] {
         return [s[1], s[2], s[3]];
     }
     let (a, b) = (samples[k - 1], samples[k]);
-    let w = if b[0] > a[0] { (t - a[0]) / (b[0] - a[0]) } else { 1.0 };
+    let w = if b[0] > a[0] {
+        (t - a[0]) / (b[0] - a[0])
+    } else {
+        1.0
+    };
     std::array::from_fn(|j| a[j + 1] + w * (b[j + 1] - a[j + 1]))
 }
 

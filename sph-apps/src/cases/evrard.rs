@@ -5,7 +5,6 @@
 use super::{cube_lattice, initial_h, CaseInfo, EnergyPoint, Scene};
 use crate::AppError;
 use sph_core::{Eos, FieldSet, HydroConfig, Particles};
-use sph_gravity::GravityParams;
 use sph_tree::{Boundary, BoundingBox};
 
 /// Listing entry.
@@ -81,7 +80,7 @@ pub fn setup(side: usize, mut config: HydroConfig) -> Result<Scene, AppError> {
         p.u[i] = U0;
     }
     config.eos = Eos::IdealGas { gamma: GAMMA };
-    config.gravity = Some(config.gravity.unwrap_or(GravityParams::default()));
+    config.gravity = Some(config.gravity.unwrap_or_default());
     Ok(Scene {
         case: INFO.name,
         particles: p,
