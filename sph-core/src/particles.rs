@@ -190,24 +190,13 @@ impl Particles {
 
     /// The fields that carry state from one step to the next (everything
     /// else is recomputed each step): what migration and halos move.
-    fn persistent(&self) -> Vec<&Vec<f64>> {
-        let mut v = vec![
-            &self.x,
-            &self.y,
-            &self.z,
-            &self.vx,
-            &self.vy,
-            &self.vz,
-            &self.dx,
-            &self.dy,
-            &self.dz,
-            &self.h,
-            &self.m,
-            &self.u,
-            &self.du_prev,
-        ];
-        v.extend(self.eos_ref.iter().filter(|f| !f.is_empty()));
-        v
+    fn persistent(&self) -> impl Iterator<Item = &Vec<f64>> + '_ {
+        [
+            &self.x, &self.y, &self.z, &self.vx, &self.vy, &self.vz, &self.dx, &self.dy,
+            &self.dz, &self.h, &self.m, &self.u, &self.du_prev,
+        ]
+        .into_iter()
+        .chain(self.eos_ref.iter().filter(|f| !f.is_empty()))
     }
 
     /// Bytes held per particle by the particle arrays (not counting
@@ -294,12 +283,12 @@ impl ParticleFields for Particles {
     }
 
     fn packed_words(&self) -> usize {
-        1 + self.persistent().len()
+        1 + self.persistent().count()
     }
 
     fn pack(&self, i: usize, out: &mut Vec<u64>) {
         out.push(self.id[i]);
-        out.extend(self.persistent().iter().map(|f| f[i].to_bits()));
+        out.extend(self.persistent().map(|f| f[i].to_bits()));
     }
 
     fn push_packed(&mut self, words: &[u64]) {
