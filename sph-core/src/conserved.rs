@@ -70,15 +70,12 @@ impl Conserved {
                 }
                 s
             })
-            .reduce(
-                Default::default,
-                |mut a, b| {
-                    for (x, y) in a.iter_mut().zip(b.iter()) {
-                        x.merge(y);
-                    }
-                    a
-                },
-            )
+            .reduce(Default::default, |mut a, b| {
+                for (x, y) in a.iter_mut().zip(b.iter()) {
+                    x.merge(y);
+                }
+                a
+            })
             .into_iter()
             .collect();
         sums.extend(

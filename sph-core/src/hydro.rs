@@ -10,6 +10,7 @@ use crate::momentum::{momentum_energy, Gradients, HydroState, MomentumStats, Pai
 use crate::neighbors::{find_neighbors, NeighborParams};
 use crate::timestep::TimestepParams;
 use crate::{CoreError, Particles};
+use rayon::prelude::*;
 use sph_comm::{Communicator, ReduceOp, SerialComm};
 use sph_domain::{Domain, DomainConfig, SyncStats};
 use sph_gravity::{Decomposition, DistributedGravity, GravityField, GravityParams, GravityStats};
@@ -141,6 +142,7 @@ pub struct Hydro<K: Kernel, C: Communicator = SerialComm> {
     list: CompactNeighborList,
     factors: PairFactors,
     h_before: Vec<f64>,
+    next_h_max: Option<f64>,
     gravity: Option<DistributedGravity>,
     gravity_tree: Octree,
     field: GravityField,
@@ -201,6 +203,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             list: CompactNeighborList::new(),
             factors: PairFactors::default(),
             h_before: Vec::new(),
+            next_h_max: None,
             gravity: config
                 .gravity
                 .map(DistributedGravity::new)
@@ -298,7 +301,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             clock = now;
         };
 
-        let owned = self.domain.sync(p, bbox)?;
+        let owned = self.domain.sync_with(p, bbox, self.next_h_max.take())?;
         lap(0, &mut times);
         self.tree
             .rebuild(self.domain.keys(), &p.x, &p.y, &p.z, self.config.bucket)?;
@@ -404,8 +407,13 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         );
         lap(8, &mut times);
 
+        // Bounds for the next step's domain: the largest h after this
+        // step's update, and how far a particle can move (open axes).
+        let h_update = self.config.neighbors.h_update(self.config.h_update);
+        let motion = self.motion_bounds(p, bbox, owned.clone(), h_update);
+
         // One global minimum: time-step criteria, neighbour and domain
-        // extremes (maxima as minima of negatives).
+        // extremes, next-step bounds (maxima as minima of negatives).
         let mut mins = [
             mstats.min_h_over_vsig,
             -mstats.max_abs_div_v,
@@ -417,6 +425,9 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             -sync.comm_seconds,
             -sync.sync_seconds,
             -max_acc,
+            -motion[0],
+            -motion[1],
+            -motion[2],
         ];
         if owned.is_empty() {
             mins[2] = f64::INFINITY;
@@ -450,7 +461,6 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             .dt(&global, -mins[9], self.dt_prev)
             .min(self.dt_cap);
         self.dt_cap = f64::INFINITY;
-        let h_update = self.config.neighbors.h_update(self.config.h_update);
         let guard = self.config.eos.uses_internal_energy();
         let report = integrate(
             p,
@@ -462,6 +472,11 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             guard,
             step,
         )?;
+        // The same box on every rank, holding every particle after the
+        // move: |dx| <= (max |v_n| + max |a| dt / 2) dt on each axis.
+        let reach = (-mins[10] + 0.5 * -mins[11] * dt) * dt;
+        grow_open_axes(bbox, reach)?;
+        self.next_h_max = Some(-mins[12]);
         lap(9, &mut times);
 
         let t = self.t;
@@ -482,6 +497,34 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
 }
 
 impl<K: Kernel, C: Communicator> Hydro<K, C> {
+    /// Over the owned particles: `[max_k |v_n,k|, max_k |a_k|, max h_next]`
+    /// with `v_n = dX / dt_prev + a dt_prev / 2` (the Press velocity the
+    /// integrator will use) and `h_next = h * factor(nc)` (its h update).
+    fn motion_bounds(
+        &self,
+        p: &Particles,
+        bbox: &BoundingBox,
+        owned: Range<usize>,
+        hu: HUpdate,
+    ) -> [f64; 3] {
+        let any_open = (0..3).any(|k| !bbox.is_periodic(k));
+        let half = 0.5 * self.dt_prev;
+        let inv = 1.0 / self.dt_prev;
+        owned
+            .into_par_iter()
+            .map(|i| {
+                let h_next = p.h[i] * hu.factor(p.nc[i]);
+                if !any_open {
+                    return [0.0, 0.0, h_next];
+                }
+                let a = [p.ax[i].abs(), p.ay[i].abs(), p.az[i].abs()];
+                let d = [p.dx[i].abs(), p.dy[i].abs(), p.dz[i].abs()];
+                let v = (0..3).map(|k| d[k] * inv + a[k] * half).fold(0.0, f64::max);
+                [v, a[0].max(a[1]).max(a[2]), h_next]
+            })
+            .reduce(|| [0.0; 3], |x, y| std::array::from_fn(|k| x[k].max(y[k])))
+    }
+
     /// Evaluates the self-gravity of all particles on the owned ones (into
     /// the gravity field buffer) and stores their potential in `phi`.
     fn gravity_field(
@@ -545,7 +588,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         p: &mut Particles,
         bbox: &mut BoundingBox,
     ) -> Result<(), CoreError> {
-        let owned = self.domain.sync(p, bbox)?;
+        let owned = self.domain.sync_with(p, bbox, self.next_h_max.take())?;
         self.tree
             .rebuild(self.domain.keys(), &p.x, &p.y, &p.z, self.config.bucket)?;
         self.search(p, bbox, self.step, owned.clone())?;
@@ -668,4 +711,23 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         );
         Ok(())
     }
+}
+
+/// Widens the open axes of `bbox` by `reach` on both sides (with a margin
+/// for rounding), so that particles moving at most `reach` stay inside.
+fn grow_open_axes(bbox: &mut BoundingBox, reach: f64) -> Result<(), CoreError> {
+    let b = bbox.boundary();
+    if (0..3).all(|k| bbox.is_periodic(k)) {
+        return Ok(());
+    }
+    let (mut lo, mut hi) = (bbox.lo(), bbox.hi());
+    for k in 0..3 {
+        if !bbox.is_periodic(k) {
+            let pad = reach * (1.0 + 1e-9) + 1e-12 * (hi[k] - lo[k] + lo[k].abs() + hi[k].abs());
+            lo[k] -= pad;
+            hi[k] += pad;
+        }
+    }
+    *bbox = BoundingBox::new(lo, hi, b)?;
+    Ok(())
 }

@@ -192,8 +192,19 @@ impl Particles {
     /// else is recomputed each step): what migration and halos move.
     fn persistent(&self) -> impl Iterator<Item = &Vec<f64>> + '_ {
         [
-            &self.x, &self.y, &self.z, &self.vx, &self.vy, &self.vz, &self.dx, &self.dy,
-            &self.dz, &self.h, &self.m, &self.u, &self.du_prev,
+            &self.x,
+            &self.y,
+            &self.z,
+            &self.vx,
+            &self.vy,
+            &self.vz,
+            &self.dx,
+            &self.dy,
+            &self.dz,
+            &self.h,
+            &self.m,
+            &self.u,
+            &self.du_prev,
         ]
         .into_iter()
         .chain(self.eos_ref.iter().filter(|f| !f.is_empty()))

@@ -166,6 +166,21 @@ impl<C: Communicator> Domain<C> {
         p: &mut P,
         bbox: &mut BoundingBox,
     ) -> Result<Range<usize>, DomainError> {
+        self.sync_with(p, bbox, None)
+    }
+
+    /// [`sync`](Self::sync) when the caller already knows, identically on
+    /// every rank, a box holding every particle (its open axes are kept as
+    /// given) and the largest smoothing length: then the tree counts are the
+    /// only global reduction. A solver can carry both from its time-step
+    /// reduction (bounding how far particles can move in one step).
+    /// Particles outside an open axis of `bbox` are an error.
+    pub fn sync_with<P: ParticleFields>(
+        &mut self,
+        p: &mut P,
+        bbox: &mut BoundingBox,
+        h_max: Option<f64>,
+    ) -> Result<Range<usize>, DomainError> {
         let start = Instant::now();
         let mut comm_s = 0.0;
         let mut bytes = 0u64;
@@ -174,16 +189,24 @@ impl<C: Communicator> Domain<C> {
         }
         self.peers.clear();
 
-        // Global box and largest h: one max-reduction.
-        let mut ext = local_extent(p)?;
-        let t = Instant::now();
-        self.comm.all_reduce(&mut ext, ReduceOp::Max);
-        comm_s += t.elapsed().as_secs_f64();
-        if ext[6] == f64::NEG_INFINITY {
-            return Err(DomainError::Empty);
+        match h_max {
+            Some(h) => {
+                check_inside(p, bbox)?;
+                self.h_limit = h * self.config.h_margin;
+            }
+            None => {
+                // Global box and largest h: one max-reduction.
+                let mut ext = local_extent(p)?;
+                let t = Instant::now();
+                self.comm.all_reduce(&mut ext, ReduceOp::Max);
+                comm_s += t.elapsed().as_secs_f64();
+                if ext[6] == f64::NEG_INFINITY {
+                    return Err(DomainError::Empty);
+                }
+                refit(bbox, &ext)?;
+                self.h_limit = ext[6] * self.config.h_margin;
+            }
         }
-        refit(bbox, &ext)?;
-        self.h_limit = ext[6] * self.config.h_margin;
 
         // Local curve order, then global counts: one sum-reduction.
         self.sort_local(p, bbox);
@@ -506,6 +529,34 @@ fn local_extent<P: ParticleFields>(p: &P) -> Result<[f64; 7], DomainError> {
         e[6] = e[6].max(v[3]);
     }
     Ok(e)
+}
+
+/// Every particle finite and inside the open axes of `bbox`.
+fn check_inside<P: ParticleFields>(p: &P, bbox: &BoundingBox) -> Result<(), DomainError> {
+    let [x, y, z] = p.positions();
+    let (lo, hi) = (bbox.lo(), bbox.hi());
+    for i in 0..p.len() {
+        let v = [x[i], y[i], z[i]];
+        for k in 0..3 {
+            if !v[k].is_finite() {
+                return Err(DomainError::NonFinite {
+                    id: p.ids()[i],
+                    what: ["x", "y", "z"][k],
+                    value: v[k],
+                });
+            }
+            if !(bbox.is_periodic(k) || (lo[k] <= v[k] && v[k] <= hi[k])) {
+                return Err(DomainError::OutsideBox {
+                    id: p.ids()[i],
+                    axis: k,
+                    value: v[k],
+                    lo: lo[k],
+                    hi: hi[k],
+                });
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Sets the open axes of `bbox` to the global extent, padded as

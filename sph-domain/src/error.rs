@@ -22,6 +22,20 @@ pub enum DomainError {
         /// Its value.
         value: f64,
     },
+    /// A particle outside the box the caller promised holds them all.
+    #[error("particle {id} lies at {value} on axis {axis}, outside the box [{lo}, {hi}]")]
+    OutsideBox {
+        /// Particle id.
+        id: u64,
+        /// The axis.
+        axis: usize,
+        /// Its coordinate.
+        value: f64,
+        /// Box bounds on that axis.
+        lo: f64,
+        /// Box bounds on that axis.
+        hi: f64,
+    },
     /// A halo message from a rank that is no peer of the last sync.
     #[error("halo message from rank {0}, which is not a peer of the last sync")]
     UnexpectedPeer(usize),
