@@ -1,12 +1,16 @@
 //! One SPH-EXA time step on one node: sort, tree, neighbours, density,
 //! EOS, IAD, momentum and energy, time step, integration.
 
+use crate::av_switch::{update_alpha, velocity_divergence, AvSwitchParams, FlowState};
 use crate::conserved::Conserved;
 use crate::density::{density, Positions};
 use crate::eos::Eos;
 use crate::iad::iad;
 use crate::integrate::{integrate, HUpdate};
-use crate::momentum::{momentum_energy, Gradients, HydroState, MomentumStats, PairFactors, Rates};
+use crate::momentum::{
+    momentum_energy, momentum_energy_switched, Gradients, HydroState, MomentumStats, PairFactors,
+    Rates,
+};
 use crate::neighbors::{find_neighbors, NeighborParams};
 use crate::timestep::TimestepParams;
 use crate::{CoreError, Particles};
@@ -43,6 +47,9 @@ pub struct HydroConfig {
     pub grad_h: bool,
     /// Self-gravity (tree multipoles; open boxes only), or none.
     pub gravity: Option<GravityParams>,
+    /// Time-dependent viscosity switches (per-particle alpha_i, SPH-EXA's
+    /// "ve" style), or none: a constant `alpha`.
+    pub av_switch: Option<AvSwitchParams>,
 }
 
 impl Default for HydroConfig {
@@ -58,6 +65,7 @@ impl Default for HydroConfig {
             bucket: 16,
             grad_h: true,
             gravity: None,
+            av_switch: None,
         }
     }
 }
@@ -142,6 +150,7 @@ pub struct Hydro<K: Kernel, C: Communicator = SerialComm> {
     list: CompactNeighborList,
     factors: PairFactors,
     h_before: Vec<f64>,
+    div_v: Vec<f64>,
     next_h_max: Option<f64>,
     gravity: Option<DistributedGravity>,
     gravity_tree: Octree,
@@ -185,6 +194,13 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 "first time step {dt0} must be positive"
             )));
         }
+        if let Some(sw) = config.av_switch {
+            if !sw.is_valid() {
+                return Err(CoreError::Invalid(format!(
+                    "AV switch parameters {sw:?} are invalid: need 0 <= alpha_min <= alpha_max and positive decay"
+                )));
+            }
+        }
         if config.bucket == 0 {
             return Err(CoreError::Invalid("bucket size must be at least 1".into()));
         }
@@ -203,6 +219,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             list: CompactNeighborList::new(),
             factors: PairFactors::default(),
             h_before: Vec::new(),
+            div_v: Vec::new(),
             next_h_max: None,
             gravity: config
                 .gravity
@@ -226,6 +243,9 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             p.dx[i] = p.vx[i] * dt0;
             p.dy[i] = p.vy[i] * dt0;
             p.dz[i] = p.vz[i] * dt0;
+        }
+        if let Some(sw) = self.config.av_switch {
+            p.enable_alpha(sw.alpha_min);
         }
     }
 
@@ -356,22 +376,88 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             iad: iad_ref,
         };
         self.factors.fill(&state);
+        if let Some(sw) = self.config.av_switch {
+            if p.alpha.len() != p.len() {
+                return Err(CoreError::Invalid(
+                    "AV switches need per-particle alpha: call Hydro::prepare on the particles"
+                        .into(),
+                ));
+            }
+            self.div_v.resize(p.len(), 0.0);
+            let flow = FlowState::from(state);
+            let g = self.config.gradients;
+            velocity_divergence(
+                &self.kernel,
+                bbox,
+                flow,
+                g,
+                &self.list,
+                &mut self.div_v,
+                &mut [],
+            );
+            self.domain.exchange(&mut [self.div_v.as_mut_slice()])?;
+            // Relax over the time since the last update (none before step 1).
+            let elapsed = if step == 1 { 0.0 } else { self.dt_prev };
+            let (list, dv) = (&self.list, &self.div_v);
+            update_alpha(
+                &self.kernel,
+                bbox,
+                flow,
+                g,
+                dv,
+                &sw,
+                elapsed,
+                list,
+                &mut p.alpha,
+            );
+            self.domain.exchange(&mut [p.alpha.as_mut_slice()])?;
+        }
+        let state = HydroState {
+            pos: Positions {
+                x: &p.x,
+                y: &p.y,
+                z: &p.z,
+                h: &p.h,
+                m: &p.m,
+            },
+            vx: &p.vx,
+            vy: &p.vy,
+            vz: &p.vz,
+            rho: &p.rho,
+            p: &p.p,
+            c: &p.c,
+            omega: &p.omega,
+            iad: std::array::from_fn(|k| p.iad[k].as_slice()),
+        };
         let rates = Rates {
             ax: &mut p.ax,
             ay: &mut p.ay,
             az: &mut p.az,
             du: &mut p.du,
         };
-        let mstats: MomentumStats = momentum_energy(
-            &self.kernel,
-            bbox,
-            state,
-            &self.factors,
-            self.config.gradients,
-            self.config.alpha,
-            &self.list,
-            rates,
-        );
+        let mstats: MomentumStats = if self.config.av_switch.is_some() {
+            momentum_energy_switched(
+                &self.kernel,
+                bbox,
+                state,
+                &self.factors,
+                self.config.gradients,
+                &p.alpha,
+                &self.list,
+                rates,
+            )
+        } else {
+            momentum_energy(
+                &self.kernel,
+                bbox,
+                state,
+                &self.factors,
+                self.config.gradients,
+                self.config.alpha,
+                &self.list,
+                rates,
+            )
+        };
         if step == 1 {
             // Adams-Bashforth needs du_{n-1}; the first step uses du_0.
             p.du_prev[owned.clone()].copy_from_slice(&p.du[owned.clone()]);

@@ -82,6 +82,9 @@ pub struct Particles {
     pub du_prev: Vec<f64>,
     /// Gravitational potential per unit mass (empty without self-gravity).
     pub phi: Vec<f64>,
+    /// Per-particle artificial-viscosity strength (empty unless AV switches
+    /// are on; see [`Particles::enable_alpha`]).
+    pub alpha: Vec<f64>,
     /// Per-particle reference density and pressure of
     /// [`Eos::TaitReferenced`](crate::Eos) (empty otherwise); a zero
     /// density is calibrated from the first density evaluation.
@@ -89,6 +92,9 @@ pub struct Particles {
     /// Neighbour count of the last search (self included), for the h update.
     pub nc: Vec<u32>,
     fields: FieldSet,
+    /// Whether `alpha` is a field of every particle (even on a rank that
+    /// holds none right now), so it travels with migrating particles.
+    alpha_on: bool,
 }
 
 impl Particles {
@@ -114,6 +120,7 @@ impl Particles {
             c: z(),
             omega: Vec::new(),
             phi: Vec::new(),
+            alpha: Vec::new(),
             iad: Default::default(),
             ax: z(),
             ay: z(),
@@ -123,6 +130,7 @@ impl Particles {
             eos_ref: Default::default(),
             nc: vec![0; n],
             fields,
+            alpha_on: false,
         };
         if fields.grad_h {
             p.omega = vec![1.0; n];
@@ -180,6 +188,9 @@ impl Particles {
         if !self.phi.is_empty() {
             v.push(&mut self.phi);
         }
+        if !self.alpha.is_empty() {
+            v.push(&mut self.alpha);
+        }
         for c in self.iad.iter_mut().chain(self.eos_ref.iter_mut()) {
             if !c.is_empty() {
                 v.push(c);
@@ -208,12 +219,13 @@ impl Particles {
         ]
         .into_iter()
         .chain(self.eos_ref.iter().filter(|f| !f.is_empty()))
+        .chain(std::iter::once(&self.alpha).filter(|_| self.alpha_on))
     }
 
     /// Bytes held per particle by the particle arrays (not counting
     /// neighbour lists or the tree).
     pub fn bytes_per_particle(&self) -> usize {
-        let optional = [&self.omega, &self.phi]
+        let optional = [&self.omega, &self.phi, &self.alpha]
             .into_iter()
             .chain(self.iad.iter())
             .chain(self.eos_ref.iter())
@@ -234,6 +246,13 @@ impl Particles {
         apply_permutation(perm, &mut self.id, scratch);
         // nc is recomputed by the next search.
         self.nc.resize(perm.len(), 0);
+    }
+
+    /// Gives every particle its own viscosity strength, starting at
+    /// `alpha0` (a persistent field: it migrates with the particle).
+    pub fn enable_alpha(&mut self, alpha0: f64) {
+        self.alpha_on = true;
+        self.alpha = vec![alpha0; self.len()];
     }
 
     /// Keeps only the particles in `range`, in order.
@@ -328,6 +347,9 @@ impl ParticleFields for Particles {
             for f in self.eos_ref.iter_mut() {
                 f.push(next());
             }
+        }
+        if self.alpha_on {
+            self.alpha.push(next());
         }
         // Recomputed every step before use.
         for f in [

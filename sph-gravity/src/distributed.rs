@@ -42,7 +42,8 @@ pub struct Decomposition<'a> {
     /// First key owned by each rank, then the end of the key space
     /// (`size + 1` entries, the same on every rank).
     pub key_start: &'a [u64],
-    /// The largest softening length of any particle on any rank.
+    /// The largest smoothing length `h` of any particle on any rank (the
+    /// softening scale of the parameters applies on top).
     pub h_max: f64,
 }
 
@@ -113,7 +114,7 @@ impl DistributedGravity {
                 |node| {
                     let mp = &mps[node as usize];
                     let mac = mac_radius(tree, node, mp, dec.bbox, params.theta);
-                    let soft = self.hmax[node as usize] + dec.h_max;
+                    let soft = params.softening * (self.hmax[node as usize] + dec.h_max);
                     let reach = mac.max(soft);
                     let far = cells
                         .iter()
@@ -159,6 +160,7 @@ impl DistributedGravity {
         }
         let g = params.g;
         let order = params.order;
+        let soft_scale = params.softening;
         let GravityField { ax, ay, az, phi } = out;
         (ax, ay, az, phi)
             .into_par_iter()
@@ -177,7 +179,7 @@ impl DistributedGravity {
                 for q in &remote_p {
                     let d = [q[0] - pi[0], q[1] - pi[1], q[2] - pi[2]];
                     let r2_true = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-                    let eps = hi + q[4];
+                    let eps = soft_scale * (hi + q[4]);
                     let r2 = r2_true.max(eps * eps);
                     if r2 == 0.0 {
                         continue;

@@ -61,6 +61,9 @@ pub enum GravityError {
         /// Particles given to the evaluation.
         particles: usize,
     },
+    /// A softening scale that is negative or not finite.
+    #[error("softening scale {0} must be a finite number >= 0")]
+    InvalidSoftening(f64),
     /// Key ranges that do not describe a decomposition over the ranks.
     #[error("invalid decomposition: {0}")]
     InvalidDecomposition(String),

@@ -119,6 +119,10 @@ pub struct GravityParams {
     /// [`TreeGravity::compute_unsorted`] build; ignored when the caller
     /// passes its own tree. Default 32.
     pub leaf_size: usize,
+    /// Scale of the pair softening length: pairs are softened within
+    /// `softening * (h_i + h_j)`. Default 1 (SPH-EXA's choice); smaller
+    /// values follow Newtonian gravity closer and depend less on h.
+    pub softening: f64,
 }
 
 impl Default for GravityParams {
@@ -129,6 +133,7 @@ impl Default for GravityParams {
             order: ExpansionOrder::Quadrupole,
             group_size: 64,
             leaf_size: 32,
+            softening: 1.0,
         }
     }
 }
@@ -141,6 +146,9 @@ impl GravityParams {
         }
         if !self.g.is_finite() {
             return Err(GravityError::InvalidG(self.g));
+        }
+        if !(self.softening.is_finite() && self.softening >= 0.0) {
+            return Err(GravityError::InvalidSoftening(self.softening));
         }
         if self.group_size == 0 {
             return Err(GravityError::InvalidGroupSize(self.group_size));

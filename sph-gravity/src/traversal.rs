@@ -79,6 +79,8 @@ pub struct TreeGravity {
     params: GravityParams,
     eval: Evaluator,
     sort: SortBuffers,
+    /// `softening * h`, when the scale is not 1.
+    scaled_h: Vec<f64>,
 }
 
 impl TreeGravity {
@@ -89,6 +91,7 @@ impl TreeGravity {
             params,
             eval: Evaluator::default(),
             sort: SortBuffers::default(),
+            scaled_h: Vec::new(),
         })
     }
 
@@ -137,6 +140,7 @@ impl TreeGravity {
                 particles: x.len(),
             });
         }
+        let h = scale_softening(self.params.softening, h, &mut self.scaled_h);
         Ok(self.eval.run(&self.params, tree, bbox, x, y, z, m, h, out))
     }
 
@@ -177,6 +181,10 @@ impl TreeGravity {
         }
         s.tree
             .rebuild(&s.keys, &s.x, &s.y, &s.z, self.params.leaf_size)?;
+        if h.is_some() && self.params.softening != 1.0 {
+            let scale = self.params.softening;
+            s.h.iter_mut().for_each(|v| *v *= scale);
+        }
         let hs = h.map(|_| s.h.as_slice());
         let stats = self.eval.run(
             &self.params,
@@ -209,6 +217,22 @@ impl TreeGravity {
                 *phi = f.phi[k];
             });
         Ok(stats)
+    }
+}
+
+/// `h` scaled by the softening factor (into `buf`), or `h` itself for 1.
+pub(crate) fn scale_softening<'a>(
+    scale: f64,
+    h: Option<&'a [f64]>,
+    buf: &'a mut Vec<f64>,
+) -> Option<&'a [f64]> {
+    match h {
+        Some(h) if scale != 1.0 => {
+            buf.clear();
+            buf.extend(h.iter().map(|v| v * scale));
+            Some(buf.as_slice())
+        }
+        other => other,
     }
 }
 

@@ -239,3 +239,29 @@ fn softened_potential_gradient_is_the_force() {
         );
     }
 }
+
+/// The softening scale is the same as scaling h: identical bits, and a
+/// negative or non-finite scale is refused.
+#[test]
+fn softening_scale_equals_scaled_h() {
+    let (x, y, z, m) = random_cloud(500, 3);
+    let h: Vec<f64> = (0..x.len())
+        .map(|i| 0.01 + 0.002 * (i % 7) as f64)
+        .collect();
+    let half: Vec<f64> = h.iter().map(|v| v * 0.5).collect();
+    let scaled = GravityParams {
+        softening: 0.5,
+        ..GravityParams::default()
+    };
+    let (a, _) = compute_gravity(&x, &y, &z, &m, Some(&h), &scaled).unwrap();
+    let (b, _) = compute_gravity(&x, &y, &z, &m, Some(&half), &GravityParams::default()).unwrap();
+    assert_eq!(a, b);
+    for bad in [-1.0, f64::NAN, f64::INFINITY] {
+        let p = GravityParams {
+            softening: bad,
+            ..GravityParams::default()
+        };
+        let err = compute_gravity(&x, &y, &z, &m, Some(&h), &p).unwrap_err();
+        assert!(err.to_string().contains("softening"), "{err}");
+    }
+}

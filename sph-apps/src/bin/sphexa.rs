@@ -37,6 +37,14 @@ enum GradientArg {
     Kernel,
 }
 
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq)]
+enum Switch {
+    /// Enabled.
+    On,
+    /// Disabled.
+    Off,
+}
+
 #[derive(ValueEnum, Clone, Copy, Debug)]
 enum CurveArg {
     /// Hilbert curve.
@@ -88,6 +96,18 @@ struct RunArgs {
     /// Leave out the grad-h correction (Omega = 1).
     #[arg(long)]
     no_grad_h: bool,
+    /// Time-dependent viscosity switches: each particle's alpha rises to
+    /// --alpha in shocks and decays to 0.05 elsewhere (SPH-EXA's "ve"
+    /// switches). Default: on for evrard, off for the other cases.
+    #[arg(long, value_name = "on|off")]
+    av_switches: Option<Switch>,
+    /// Self-gravity: opening angle theta of the tree (cases with gravity).
+    #[arg(long, default_value_t = 0.5)]
+    theta: f64,
+    /// Self-gravity: pairs are softened within SOFTENING * (h_i + h_j)
+    /// (1 = SPH-EXA's choice; cases with gravity).
+    #[arg(long, default_value_t = 1.0)]
+    softening: f64,
     /// Also write the final state of every particle (particles.csv, sorted
     /// by id, exact decimal round-trip of every value).
     #[arg(long)]
@@ -196,6 +216,34 @@ fn run(a: RunArgs) -> Result<(), AppError> {
     config.neighbors.ng0 = a.ng0;
     config.neighbors.ngmax = a.ngmax;
     config.timestep.k_courant = a.courant;
+    if !(a.theta > 0.0 && a.theta.is_finite()) {
+        return Err(AppError::Usage(format!(
+            "--theta {} must be positive",
+            a.theta
+        )));
+    }
+    if !(a.softening >= 0.0 && a.softening.is_finite()) {
+        return Err(AppError::Usage(format!(
+            "--softening {} must be >= 0",
+            a.softening
+        )));
+    }
+    config.gravity = Some(sph_gravity::GravityParams {
+        theta: a.theta,
+        softening: a.softening,
+        ..Default::default()
+    });
+    let switches = a.av_switches.unwrap_or(if info.name == "evrard" {
+        Switch::On
+    } else {
+        Switch::Off
+    });
+    if switches == Switch::On {
+        config.av_switch = Some(sph_core::AvSwitchParams {
+            alpha_max: a.alpha,
+            ..Default::default()
+        });
+    }
 
     let scene = match info.name {
         "sedov" => cases::sedov::setup(side, config)?,

@@ -55,6 +55,8 @@ pub fn setup(side: usize, mut config: HydroConfig) -> Result<Scene, AppError> {
     }
     let _ = volume;
     config.eos = Eos::IdealGas { gamma: GAMMA };
+    // Pure hydrodynamics: no self-gravity whatever the caller passed.
+    config.gravity = None;
     Ok(Scene {
         case: INFO.name,
         particles: p,

@@ -46,6 +46,8 @@ pub fn setup(side: usize, mut config: HydroConfig) -> Result<Scene, AppError> {
         p.u[i] = norm * (-r2 / (WIDTH * WIDTH)).exp() + U0;
     }
     config.eos = Eos::IdealGas { gamma: GAMMA };
+    // Pure hydrodynamics: no self-gravity whatever the caller passed.
+    config.gravity = None;
     let reference = Sedov::spherical(GAMMA, ENERGY, 1.0)?.with_ambient(0.0, U0);
     Ok(Scene {
         case: INFO.name,

@@ -80,6 +80,8 @@ pub fn setup(side: usize, mut config: HydroConfig) -> Result<Scene, AppError> {
     // Reference density 0 = calibrate from the first density evaluation.
     p.eos_ref = [vec![0.0; n], p_ref];
     config.eos = Eos::TaitReferenced { c0: C0 };
+    // Pure hydrodynamics: no self-gravity whatever the caller passed.
+    config.gravity = None;
     let bbox = BoundingBox::new(
         [-0.5 * L; 3],
         [0.5 * L; 3],
