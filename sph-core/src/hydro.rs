@@ -23,6 +23,37 @@ use sph_tree::{BoundingBox, CompactNeighborList, Curve, NeighborStats, Octree};
 use std::ops::Range;
 use std::time::Instant;
 
+/// `Positions` of a `Particles`, borrowing field by field (so other fields
+/// stay free for mutable borrows).
+macro_rules! positions {
+    ($p:expr) => {
+        Positions {
+            x: &$p.x,
+            y: &$p.y,
+            z: &$p.z,
+            h: &$p.h,
+            m: &$p.m,
+        }
+    };
+}
+
+/// `HydroState` of a `Particles`, borrowing field by field.
+macro_rules! hydro_state {
+    ($p:expr) => {
+        HydroState {
+            pos: positions!($p),
+            vx: &$p.vx,
+            vy: &$p.vy,
+            vz: &$p.vz,
+            rho: &$p.rho,
+            p: &$p.p,
+            c: &$p.c,
+            omega: &$p.omega,
+            iad: std::array::from_fn(|k| $p.iad[k].as_slice()),
+        }
+    };
+}
+
 /// Everything that defines the hydrodynamics scheme.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HydroConfig {
@@ -335,13 +366,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         lap(4, &mut times);
 
         if self.config.gradients == Gradients::Iad {
-            let pos = Positions {
-                x: &p.x,
-                y: &p.y,
-                z: &p.z,
-                h: &p.h,
-                m: &p.m,
-            };
+            let pos = positions!(p);
             if let Err(s) = iad(&self.kernel, bbox, pos, &p.rho, &self.list, &mut p.iad) {
                 return Err(CoreError::SingularIad {
                     step,
@@ -356,25 +381,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         }
         lap(5, &mut times);
 
-        let pos = Positions {
-            x: &p.x,
-            y: &p.y,
-            z: &p.z,
-            h: &p.h,
-            m: &p.m,
-        };
-        let iad_ref: [&[f64]; 6] = std::array::from_fn(|k| p.iad[k].as_slice());
-        let state = HydroState {
-            pos,
-            vx: &p.vx,
-            vy: &p.vy,
-            vz: &p.vz,
-            rho: &p.rho,
-            p: &p.p,
-            c: &p.c,
-            omega: &p.omega,
-            iad: iad_ref,
-        };
+        let state = hydro_state!(p);
         self.factors.fill(&state);
         if let Some(sw) = self.config.av_switch {
             if p.alpha.len() != p.len() {
@@ -412,23 +419,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             );
             self.domain.exchange(&mut [p.alpha.as_mut_slice()])?;
         }
-        let state = HydroState {
-            pos: Positions {
-                x: &p.x,
-                y: &p.y,
-                z: &p.z,
-                h: &p.h,
-                m: &p.m,
-            },
-            vx: &p.vx,
-            vy: &p.vy,
-            vz: &p.vz,
-            rho: &p.rho,
-            p: &p.p,
-            c: &p.c,
-            omega: &p.omega,
-            iad: std::array::from_fn(|k| p.iad[k].as_slice()),
-        };
+        let state = hydro_state!(p);
         let rates = Rates {
             ax: &mut p.ax,
             ay: &mut p.ay,
@@ -738,13 +729,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
 
     /// Density and grad-h factor of the owned particles.
     fn density(&self, p: &mut Particles, bbox: &BoundingBox) {
-        let pos = Positions {
-            x: &p.x,
-            y: &p.y,
-            z: &p.z,
-            h: &p.h,
-            m: &p.m,
-        };
+        let pos = positions!(p);
         density(
             &self.kernel,
             bbox,

@@ -8,87 +8,8 @@
 
 use proptest::prelude::*;
 use sph_comm::{run_ranks, Communicator};
-use sph_domain::{Domain, DomainConfig, ParticleFields};
+use sph_domain::{Domain, DomainConfig, ParticleFields, Points};
 use sph_tree::{compute_keys, Boundary, BoundingBox, Curve};
-use std::ops::Range;
-
-/// Minimal container: id, position, h and one carried value.
-#[derive(Debug, Default, Clone)]
-struct Cloud {
-    id: Vec<u64>,
-    x: Vec<f64>,
-    y: Vec<f64>,
-    z: Vec<f64>,
-    h: Vec<f64>,
-    q: Vec<f64>,
-}
-
-impl ParticleFields for Cloud {
-    fn len(&self) -> usize {
-        self.id.len()
-    }
-    fn ids(&self) -> &[u64] {
-        &self.id
-    }
-    fn positions(&self) -> [&[f64]; 3] {
-        [&self.x, &self.y, &self.z]
-    }
-    fn smoothing_lengths(&self) -> &[f64] {
-        &self.h
-    }
-    fn packed_words(&self) -> usize {
-        6
-    }
-    fn pack(&self, i: usize, out: &mut Vec<u64>) {
-        out.extend([
-            self.id[i],
-            self.x[i].to_bits(),
-            self.y[i].to_bits(),
-            self.z[i].to_bits(),
-            self.h[i].to_bits(),
-            self.q[i].to_bits(),
-        ]);
-    }
-    fn push_packed(&mut self, w: &[u64]) {
-        self.id.push(w[0]);
-        for (v, &b) in [
-            &mut self.x,
-            &mut self.y,
-            &mut self.z,
-            &mut self.h,
-            &mut self.q,
-        ]
-        .into_iter()
-        .zip(&w[1..])
-        {
-            v.push(f64::from_bits(b));
-        }
-    }
-    fn keep(&mut self, r: Range<usize>) {
-        self.id = self.id[r.clone()].to_vec();
-        for v in [
-            &mut self.x,
-            &mut self.y,
-            &mut self.z,
-            &mut self.h,
-            &mut self.q,
-        ] {
-            *v = v[r.clone()].to_vec();
-        }
-    }
-    fn reorder(&mut self, perm: &[u32], _scratch: &mut Vec<u64>) {
-        self.id = perm.iter().map(|&p| self.id[p as usize]).collect();
-        for v in [
-            &mut self.x,
-            &mut self.y,
-            &mut self.z,
-            &mut self.h,
-            &mut self.q,
-        ] {
-            *v = perm.iter().map(|&p| v[p as usize]).collect();
-        }
-    }
-}
 
 struct Rng(u64);
 impl Rng {
@@ -102,10 +23,10 @@ impl Rng {
 }
 
 /// `n` particles in the unit cube, half of them in a tight clump, h in
-/// [0.02, 0.06]; the value carried is a function of the id.
-fn global_cloud(n: usize, seed: u64) -> Cloud {
+/// [0.02, 0.06].
+fn global_cloud(n: usize, seed: u64) -> Points {
     let mut rng = Rng(seed);
-    let mut c = Cloud::default();
+    let mut c = Points::default();
     for i in 0..n as u64 {
         let clump = i % 2 == 0;
         let mut p = || {
@@ -115,15 +36,8 @@ fn global_cloud(n: usize, seed: u64) -> Cloud {
                 rng.uniform()
             }
         };
-        let (x, y, z) = (p(), p(), p());
-        c.push_packed(&[
-            i,
-            x.to_bits(),
-            y.to_bits(),
-            z.to_bits(),
-            (0.02 + 0.04 * rng.uniform()).to_bits(),
-            value(i).to_bits(),
-        ]);
+        let pos = [p(), p(), p()];
+        c.push(i, pos, 0.02 + 0.04 * rng.uniform());
     }
     c
 }
@@ -136,8 +50,8 @@ fn value(id: u64) -> f64 {
 fn check_sync<C: Communicator>(
     comm: &C,
     domain: &Domain<C>,
-    local: &Cloud,
-    global: &Cloud,
+    local: &Points,
+    global: &Points,
     bbox: &BoundingBox,
 ) -> Vec<u64> {
     let owned = domain.owned();
@@ -201,7 +115,7 @@ fn run(ranks: usize, n: usize, seed: u64, boundary: Boundary) {
         };
         let mut domain = Domain::new(&comm, config).unwrap();
         // Start from an arbitrary split: every rank-th particle.
-        let mut local = Cloud::default();
+        let mut local = Points::default();
         let mut buf = Vec::new();
         for i in (comm.rank()..n).step_by(ranks) {
             buf.clear();
@@ -214,14 +128,21 @@ fn run(ranks: usize, n: usize, seed: u64, boundary: Boundary) {
             domain.sync(&mut local, &mut bbox).unwrap();
             let ids = check_sync(domain.comm(), &domain, &local, &global, &bbox);
             assert_eq!(ids, (0..n as u64).collect::<Vec<_>>(), "round {round}: ids");
-            // Halo exchange: clobber the halos' values, exchange, compare.
+            // Halo exchange: owners' values by id, garbage in the halos;
+            // after the exchange every halo holds its owner's value.
             let owned = domain.owned();
-            for i in (0..local.len()).filter(|i| !owned.contains(i)) {
-                local.q[i] = -1.0;
-            }
-            domain.exchange(&mut [local.q.as_mut_slice()]).unwrap();
+            let mut q: Vec<f64> = (0..local.len())
+                .map(|i| {
+                    if owned.contains(&i) {
+                        value(local.id[i])
+                    } else {
+                        -1.0
+                    }
+                })
+                .collect();
+            domain.exchange(&mut [q.as_mut_slice()]).unwrap();
             for i in 0..local.len() {
-                assert_eq!(local.q[i], value(local.id[i]), "round {round}: halo value");
+                assert_eq!(q[i], value(local.id[i]), "round {round}: halo value");
             }
             // Move everything (the same displacement on every rank, by id).
             let shift = |id: u64, k: u64| {

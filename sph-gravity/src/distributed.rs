@@ -15,6 +15,7 @@
 //! the number of threads.
 
 use crate::multipole::Multipole;
+use crate::traversal::mac_radius;
 use crate::{GravityError, GravityField, GravityParams, GravityStats, TreeGravity};
 use rayon::prelude::*;
 use sph_comm::Communicator;
@@ -113,7 +114,7 @@ impl DistributedGravity {
             tree.traverse(
                 |node| {
                     let mp = &mps[node as usize];
-                    let mac = mac_radius(tree, node, mp, dec.bbox, params.theta);
+                    let mac = mac_radius(tree, node, mp.com, dec.bbox, 1.0 / params.theta);
                     let soft = params.softening * (self.hmax[node as usize] + dec.h_max);
                     let reach = mac.max(soft);
                     let far = cells
@@ -201,25 +202,6 @@ impl DistributedGravity {
         stats.p2p += (remote_p.len() * x.len()) as u64;
         Ok(stats)
     }
-}
-
-/// `l / theta + s` of a node: `l` the size of its geometric SFC cell, `s`
-/// the distance from that cell's centre to the expansion centre.
-fn mac_radius(tree: &Octree, node: NodeId, mp: &Multipole, bbox: &BoundingBox, theta: f64) -> f64 {
-    let (blo, blen) = (bbox.lo(), bbox.lengths());
-    let (lo, hi) = tree.node_box(node);
-    let cells = f64::from(1u32 << tree.level(node));
-    let mut l = 0.0f64;
-    let mut s2 = 0.0;
-    for d in 0..3 {
-        let size = blen[d] / cells;
-        let mid = 0.5 * (lo[d] + hi[d]);
-        let idx = ((mid - blo[d]) / size).floor().clamp(0.0, cells - 1.0);
-        let centre = blo[d] + (idx + 0.5) * size;
-        l = l.max(size);
-        s2 += (mp.com[d] - centre).powi(2);
-    }
-    l / theta + s2.sqrt()
 }
 
 /// The aligned octree cells (as boxes) that tile the key range `[lo, hi)`:

@@ -220,6 +220,33 @@ impl TreeGravity {
     }
 }
 
+/// The vector-MAC radius `l / theta + s` of a node: `l` the size of its
+/// geometric SFC cell (the level's cell holding the centre of its tight
+/// box), `s` the distance from that cell's centre to the expansion centre.
+pub(crate) fn mac_radius(
+    tree: &Octree,
+    node: NodeId,
+    com: [f64; 3],
+    bbox: &BoundingBox,
+    inv_theta: f64,
+) -> f64 {
+    let (blo, blen) = (bbox.lo(), bbox.lengths());
+    let (lo, hi) = tree.node_box(node);
+    let cells = f64::from(1u32 << tree.level(node));
+    let mut l = 0.0f64;
+    let mut s2 = 0.0;
+    for d in 0..3 {
+        let size = blen[d] / cells;
+        let mid = 0.5 * (lo[d] + hi[d]);
+        let idx = ((mid - blo[d]) / size).floor().clamp(0.0, cells - 1.0);
+        let centre = blo[d] + (idx + 0.5) * size;
+        l = l.max(size);
+        let off = com[d] - centre;
+        s2 += off * off;
+    }
+    l * inv_theta + s2.sqrt()
+}
+
 /// `h` scaled by the softening factor (into `buf`), or `h` itself for 1.
 pub(crate) fn scale_softening<'a>(
     scale: f64,
@@ -296,25 +323,9 @@ impl Evaluator {
         let hmax = &self.hmax;
         self.crit.clear();
         self.crit.resize(tree.num_nodes(), NodeCrit::default());
-        let (blo, blen) = (bbox.lo(), bbox.lengths());
         self.crit.par_iter_mut().enumerate().for_each(|(k, c)| {
-            let (lo, hi) = tree.node_box(k as NodeId);
             let com = mps[k].com;
-            // Geometric SFC cell of the node: the level's cell holding the
-            // centre of the tight box.
-            let cells = f64::from(1u32 << tree.level(k as NodeId));
-            let mut l = 0.0f64;
-            let mut s2 = 0.0;
-            for d in 0..3 {
-                let size = blen[d] / cells;
-                let mid = 0.5 * (lo[d] + hi[d]);
-                let idx = ((mid - blo[d]) / size).floor().clamp(0.0, cells - 1.0);
-                let centre = blo[d] + (idx + 0.5) * size;
-                l = l.max(size);
-                let off = com[d] - centre;
-                s2 += off * off;
-            }
-            let mac = l * inv_theta + s2.sqrt();
+            let mac = mac_radius(tree, k as NodeId, com, bbox, inv_theta);
             *c = NodeCrit {
                 com,
                 mac2: mac * mac,

@@ -24,7 +24,7 @@ struct Cli {
 enum Command {
     /// Run a test case and write its outputs (conserved.csv, timings.csv,
     /// profile.csv, summary.json) into --out.
-    Run(RunArgs),
+    Run(Box<RunArgs>),
     /// List the test cases.
     Cases,
 }
@@ -81,33 +81,38 @@ struct RunArgs {
     /// Largest accepted neighbour count before h is iterated.
     #[arg(long, default_value_t = 150)]
     ngmax: usize,
-    /// Gradient operator.
-    #[arg(long, value_enum, default_value = "iad")]
-    gradients: GradientArg,
+    /// Gradient operator (default: the case's; iad for all but evrard).
+    #[arg(long, value_enum)]
+    gradients: Option<GradientArg>,
     /// Space-filling curve for sorting particles.
     #[arg(long, value_enum, default_value = "hilbert")]
     curve: CurveArg,
-    /// Artificial viscosity strength alpha.
-    #[arg(long, default_value_t = 1.0)]
-    alpha: f64,
+    /// Artificial viscosity strength alpha, the maximum with switches
+    /// (default: the case's; 1 for all but evrard, 0.5).
+    #[arg(long)]
+    alpha: Option<f64>,
     /// Courant factor.
     #[arg(long, default_value_t = 0.2)]
     courant: f64,
-    /// Leave out the grad-h correction (Omega = 1).
-    #[arg(long)]
+    /// The grad-h correction Omega (default: the case's; on for all but
+    /// evrard).
+    #[arg(long, value_name = "on|off")]
+    grad_h: Option<Switch>,
+    /// Leave out the grad-h correction (Omega = 1): `--grad-h off`.
+    #[arg(long, conflicts_with = "grad_h")]
     no_grad_h: bool,
     /// Time-dependent viscosity switches: each particle's alpha rises to
     /// --alpha in shocks and decays to 0.05 elsewhere (SPH-EXA's "ve"
-    /// switches). Default: on for evrard, off for the other cases.
+    /// switches). Default: the case's; on for evrard only.
     #[arg(long, value_name = "on|off")]
     av_switches: Option<Switch>,
     /// Self-gravity: opening angle theta of the tree (cases with gravity).
     #[arg(long, default_value_t = 0.5)]
     theta: f64,
     /// Self-gravity: pairs are softened within SOFTENING * (h_i + h_j)
-    /// (1 = SPH-EXA's choice; cases with gravity).
-    #[arg(long, default_value_t = 1.0)]
-    softening: f64,
+    /// (1 = SPH-EXA's choice; default: the case's, 0.25 for evrard).
+    #[arg(long)]
+    softening: Option<f64>,
     /// Also write the final state of every particle (particles.csv, sorted
     /// by id, exact decimal round-trip of every value).
     #[arg(long)]
@@ -133,7 +138,7 @@ fn main() -> ExitCode {
             }
             ExitCode::SUCCESS
         }
-        Command::Run(args) => match run(args) {
+        Command::Run(args) => match run(*args) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
                 eprintln!("error: {e}");
@@ -179,9 +184,6 @@ fn run(a: RunArgs) -> Result<(), AppError> {
             a.ng0, a.ngmax
         )));
     }
-    if !(a.alpha >= 0.0 && a.alpha.is_finite()) {
-        return Err(AppError::Usage(format!("--alpha {} must be >= 0", a.alpha)));
-    }
     if !(a.courant > 0.0 && a.courant <= 1.0) {
         return Err(AppError::Usage(format!(
             "--courant {} must be in (0, 1]",
@@ -201,16 +203,10 @@ fn run(a: RunArgs) -> Result<(), AppError> {
     let kernel: Tabulated = kernel_choice.tabulate(Tabulated::DEFAULT_POINTS)?;
 
     let mut config = HydroConfig {
-        gradients: match a.gradients {
-            GradientArg::Iad => Gradients::Iad,
-            GradientArg::Kernel => Gradients::Kernel,
-        },
         curve: match a.curve {
             CurveArg::Hilbert => Curve::Hilbert,
             CurveArg::Morton => Curve::Morton,
         },
-        alpha: a.alpha,
-        grad_h: !a.no_grad_h,
         ..HydroConfig::default()
     };
     config.neighbors.ng0 = a.ng0;
@@ -222,28 +218,41 @@ fn run(a: RunArgs) -> Result<(), AppError> {
             a.theta
         )));
     }
-    if !(a.softening >= 0.0 && a.softening.is_finite()) {
-        return Err(AppError::Usage(format!(
-            "--softening {} must be >= 0",
-            a.softening
-        )));
+    // The case's scheme, then what the command line overrides.
+    let mut scheme = info.scheme;
+    if let Some(g) = a.gradients {
+        scheme.gradients = match g {
+            GradientArg::Iad => Gradients::Iad,
+            GradientArg::Kernel => Gradients::Kernel,
+        };
     }
+    if let Some(alpha) = a.alpha {
+        if !(alpha >= 0.0 && alpha.is_finite()) {
+            return Err(AppError::Usage(format!("--alpha {alpha} must be >= 0")));
+        }
+        scheme.alpha = alpha;
+    }
+    if let Some(g) = a.grad_h {
+        scheme.grad_h = g == Switch::On;
+    }
+    if a.no_grad_h {
+        scheme.grad_h = false;
+    }
+    if let Some(s) = a.av_switches {
+        scheme.av_switches = s == Switch::On;
+    }
+    if let Some(s) = a.softening {
+        if !(s >= 0.0 && s.is_finite()) {
+            return Err(AppError::Usage(format!("--softening {s} must be >= 0")));
+        }
+        scheme.softening = s;
+    }
+    // Cases without self-gravity drop these parameters.
     config.gravity = Some(sph_gravity::GravityParams {
         theta: a.theta,
-        softening: a.softening,
         ..Default::default()
     });
-    let switches = a.av_switches.unwrap_or(if info.name == "evrard" {
-        Switch::On
-    } else {
-        Switch::Off
-    });
-    if switches == Switch::On {
-        config.av_switch = Some(sph_core::AvSwitchParams {
-            alpha_max: a.alpha,
-            ..Default::default()
-        });
-    }
+    scheme.apply(&mut config);
 
     let scene = match info.name {
         "sedov" => cases::sedov::setup(side, config)?,

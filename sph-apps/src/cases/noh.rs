@@ -12,6 +12,7 @@ pub const INFO: CaseInfo = CaseInfo {
     name: "noh",
     description: "Noh implosion of a cold sphere vs the exact solution (64x compression)",
     default_side: 30,
+    scheme: super::Scheme::PAPER,
     default_end_time: 0.3,
 };
 

@@ -13,6 +13,7 @@ pub const INFO: CaseInfo = CaseInfo {
     name: "sedov",
     description: "Sedov-Taylor blast wave in a periodic box vs the similarity solution",
     default_side: 30,
+    scheme: super::Scheme::PAPER,
     default_end_time: 0.05,
 };
 

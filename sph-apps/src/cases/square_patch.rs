@@ -14,6 +14,7 @@ pub const INFO: CaseInfo = CaseInfo {
     name: "square-patch",
     description: "Rotating square patch (stiff Tait EOS, free surface); checks angular momentum",
     default_side: 20,
+    scheme: super::Scheme::PAPER,
     default_end_time: 0.05,
 };
 
