@@ -2,6 +2,7 @@
 //! EOS, IAD, momentum and energy, time step, integration.
 
 use crate::av_switch::{update_alpha, velocity_divergence, AvSwitchParams, FlowState};
+use crate::conduction::conduction;
 use crate::conserved::Conserved;
 use crate::density::{density, Positions};
 use crate::eos::Eos;
@@ -81,6 +82,9 @@ pub struct HydroConfig {
     /// Time-dependent viscosity switches (per-particle alpha_i, SPH-EXA's
     /// "ve" style), or none: a constant `alpha`.
     pub av_switch: Option<AvSwitchParams>,
+    /// Artificial conductivity strength `alpha_u` of internal energy
+    /// (Price 2008; 0 = off, the paper's scheme).
+    pub conductivity: f64,
 }
 
 impl Default for HydroConfig {
@@ -97,6 +101,7 @@ impl Default for HydroConfig {
             grad_h: true,
             gravity: None,
             av_switch: None,
+            conductivity: 0.0,
         }
     }
 }
@@ -231,6 +236,12 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                     "AV switch parameters {sw:?} are invalid: need 0 <= alpha_min <= alpha_max and positive decay"
                 )));
             }
+        }
+        if !(config.conductivity >= 0.0 && config.conductivity.is_finite()) {
+            return Err(CoreError::Invalid(format!(
+                "conductivity {} must be a finite number >= 0",
+                config.conductivity
+            )));
         }
         if config.bucket == 0 {
             return Err(CoreError::Invalid("bucket size must be at least 1".into()));
@@ -449,6 +460,19 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 rates,
             )
         };
+        if self.config.conductivity > 0.0 {
+            conduction(
+                &self.kernel,
+                bbox,
+                positions!(p),
+                &p.rho,
+                &p.p,
+                &p.u,
+                self.config.conductivity,
+                &self.list,
+                &mut p.du,
+            );
+        }
         if step == 1 {
             // Adams-Bashforth needs du_{n-1}; the first step uses du_0.
             p.du_prev[owned.clone()].copy_from_slice(&p.du[owned.clone()]);

@@ -51,6 +51,7 @@
 //! ```
 
 pub mod av_switch;
+pub mod conduction;
 pub mod conserved;
 pub mod density;
 pub mod eos;

@@ -376,3 +376,51 @@ fn omega_is_near_one_on_lattice_and_varies_when_perturbed() {
     assert!(mn > 0.5 && mx < 1.5, "omega in [{mn}, {mx}]");
     assert!(mx - mn > 1e-3, "omega constant: [{mn}, {mx}]");
 }
+
+/// Artificial conductivity moves internal energy from hot to cold without
+/// creating or destroying it: sum m du/dt stays zero to round-off, and on
+/// a hot spot the hottest particle cools while its neighbours heat.
+#[test]
+fn conductivity_conserves_energy_and_flows_downhill() {
+    let mut s = lattice(10, 0.3, 60.0, 5);
+    let n = s.p.len();
+    for i in 0..n {
+        let r2 = s.p.x[i].powi(2) + s.p.y[i].powi(2) + s.p.z[i].powi(2);
+        s.p.u[i] = 1.0 + 5.0 * (-r2 / 0.01).exp();
+    }
+    compute_density(&mut s);
+    for i in 0..n {
+        s.p.p[i] = 2.0 / 3.0 * s.p.rho[i] * s.p.u[i];
+    }
+    let mut du = vec![0.0; n];
+    let pos = Positions {
+        x: &s.p.x,
+        y: &s.p.y,
+        z: &s.p.z,
+        h: &s.p.h,
+        m: &s.p.m,
+    };
+    sph_core::conduction::conduction(
+        &kernel(),
+        &s.bbox,
+        pos,
+        &s.p.rho,
+        &s.p.p,
+        &s.p.u,
+        1.0,
+        &s.list,
+        &mut du,
+    );
+    let total: f64 = (0..n).map(|i| s.p.m[i] * du[i]).sum();
+    let scale: f64 = (0..n).map(|i| s.p.m[i] * du[i].abs()).sum();
+    assert!(scale > 0.0);
+    assert!(total.abs() < 1e-13 * scale, "{total:e} vs {scale:e}");
+    let hottest = (0..n)
+        .max_by(|&a, &b| s.p.u[a].total_cmp(&s.p.u[b]))
+        .unwrap();
+    assert!(du[hottest] < 0.0, "the hottest particle must cool");
+    let coldest = (0..n)
+        .min_by(|&a, &b| s.p.u[a].total_cmp(&s.p.u[b]))
+        .unwrap();
+    assert!(du[coldest] >= 0.0, "the coldest particle must not cool");
+}

@@ -106,6 +106,10 @@ struct RunArgs {
     /// switches). Default: the case's; on for evrard only.
     #[arg(long, value_name = "on|off")]
     av_switches: Option<Switch>,
+    /// Artificial conductivity of internal energy alpha_u (0 = off, the
+    /// paper's scheme; ~1 smooths wall heating at shocks and walls).
+    #[arg(long, default_value_t = 0.0)]
+    conductivity: f64,
     /// Self-gravity: opening angle theta of the tree (cases with gravity).
     #[arg(long, default_value_t = 0.5)]
     theta: f64,
@@ -212,6 +216,13 @@ fn run(a: RunArgs) -> Result<(), AppError> {
     config.neighbors.ng0 = a.ng0;
     config.neighbors.ngmax = a.ngmax;
     config.timestep.k_courant = a.courant;
+    if !(a.conductivity >= 0.0 && a.conductivity.is_finite()) {
+        return Err(AppError::Usage(format!(
+            "--conductivity {} must be >= 0",
+            a.conductivity
+        )));
+    }
+    config.conductivity = a.conductivity;
     if !(a.theta > 0.0 && a.theta.is_finite()) {
         return Err(AppError::Usage(format!(
             "--theta {} must be positive",
