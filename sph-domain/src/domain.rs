@@ -323,9 +323,11 @@ impl<C: Communicator> Domain<C> {
     }
 
     /// Copies the owners' values of `fields` into the halo slots of every
-    /// rank (point to point, with the peers of the last sync).
+    /// rank (point to point, with the peers of the last sync). Collective:
+    /// every rank calls it, also one without peers (the sparse exchange
+    /// needs every rank to learn that nothing more is coming).
     pub fn exchange(&mut self, fields: &mut [&mut [f64]]) -> Result<(), DomainError> {
-        if self.peers.is_empty() {
+        if self.comm.size() == 1 {
             return Ok(());
         }
         let nf = fields.len();

@@ -179,6 +179,13 @@ fn open_box_on_2_and_3_ranks() {
     }
 }
 
+/// A seed the proptest found: one of 4 ranks had no halo peers and skipped
+/// the (collective) halo exchange.
+#[test]
+fn rank_without_peers_still_exchanges() {
+    run(4, 600, 9901396551980440087, Boundary::Periodic);
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(8))]
     #[test]
