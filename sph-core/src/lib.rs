@@ -60,6 +60,7 @@ pub mod geometry;
 pub mod hydro;
 pub mod iad;
 pub mod integrate;
+pub mod lanes;
 pub mod momentum;
 pub mod neighbors;
 mod particles;

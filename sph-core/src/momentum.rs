@@ -24,6 +24,7 @@
 
 use crate::density::Positions;
 use crate::geometry::Separation;
+use crate::lanes::{neighbour_lanes, F64s, GroupUnion, LANES};
 use rayon::prelude::*;
 use sph_kernels::Kernel;
 use sph_tree::{BoundingBox, CompactNeighborList};
@@ -170,8 +171,15 @@ pub fn momentum_energy_switched<K: Kernel>(
     }
 }
 
+/// `a[..n]`: slices of one length let the compiler drop bounds checks.
+#[inline(always)]
+fn cut(a: &[f64], n: usize) -> &[f64] {
+    &a[..n]
+}
+
 /// The pair loop; `SWITCHED` selects `alpha_ij = (alpha_per[i] +
-/// alpha_per[j]) / 2` over the constant `alpha` at compile time.
+/// alpha_per[j]) / 2` over the constant `alpha` at compile time. Targets
+/// go in groups of [`LANES`], one per lane ([`lanes`](crate::lanes)).
 fn pair_loop<K: Kernel, const IAD: bool, const SWITCHED: bool>(
     kernel: &K,
     bbox: &BoundingBox,
@@ -185,117 +193,154 @@ fn pair_loop<K: Kernel, const IAD: bool, const SWITCHED: bool>(
     let sep = Separation::new(bbox);
     let targets = nl.targets();
     let norm = kernel.norm();
+    let support = kernel.support();
     let pos = s.pos;
+    // Every per-particle slice cut to the same length, so that one check
+    // per run of neighbours covers all loads of the run (the compiler drops
+    // the per-load bounds checks).
+    let n = s.rho.len();
+    let (x, y, z, h, m) = (
+        cut(pos.x, n),
+        cut(pos.y, n),
+        cut(pos.z, n),
+        cut(pos.h, n),
+        cut(pos.m, n),
+    );
+    let (vx, vy, vz, cs) = (cut(s.vx, n), cut(s.vy, n), cut(s.vz, n), cut(s.c, n));
+    let (inv_h, inv_rho, pre) = (cut(&f.inv_h, n), cut(&f.inv_rho, n), cut(&f.pre, n));
+    let iad: [&[f64]; 6] = if IAD {
+        s.iad.map(|a| cut(a, n))
+    } else {
+        [&[]; 6]
+    };
+    let alpha_per = if SWITCHED {
+        cut(alpha_per, n)
+    } else {
+        alpha_per
+    };
     let r = targets.clone();
     (
-        out.ax[r.clone()].par_iter_mut(),
-        out.ay[r.clone()].par_iter_mut(),
-        out.az[r.clone()].par_iter_mut(),
-        out.du[r].par_iter_mut(),
+        out.ax[r.clone()].par_chunks_mut(LANES),
+        out.ay[r.clone()].par_chunks_mut(LANES),
+        out.az[r.clone()].par_chunks_mut(LANES),
+        out.du[r].par_chunks_mut(LANES),
     )
         .into_par_iter()
         .enumerate()
-        .map(|(k, (ax, ay, az, du))| {
-            let i = targets.start + k;
-            let pi = [pos.x[i], pos.y[i], pos.z[i]];
-            let vi = [s.vx[i], s.vy[i], s.vz[i]];
-            let inv_hi = f.inv_h[i];
-            let ki3 = norm * inv_hi * inv_hi * inv_hi;
-            let ci = s.c[i];
-            let (pre_i, inv_rho_i) = (f.pre[i], f.inv_rho[i]);
-            let alpha_i = if SWITCHED { alpha_per[i] } else { alpha };
-            let ci_m = if IAD {
-                [
-                    s.iad[0][i],
-                    s.iad[1][i],
-                    s.iad[2][i],
-                    s.iad[3][i],
-                    s.iad[4][i],
-                    s.iad[5][i],
-                ]
-            } else {
-                [0.0; 6]
+        .map_init(GroupUnion::default, |union, (g, (ax, ay, az, du))| {
+            let first = targets.start + g * LANES;
+            let valid = ax.len();
+            let load = |a: &[f64]| F64s::load(a, first, valid);
+            let xi = [load(pos.x), load(pos.y), load(pos.z)];
+            let vi = [load(s.vx), load(s.vy), load(s.vz)];
+            let reach_i = {
+                let r = support * load(pos.h);
+                r * r
             };
-            let mut a = [0.0; 3];
-            let mut e_p = 0.0; // sum_j m_j v_ij . A_ij(h_i)
-            let mut e_av = 0.0;
-            let mut div_v = 0.0;
-            let mut vsig_max = ci;
-            for run in nl.runs(i) {
-                for j in run {
-                    if j == i {
-                        continue;
-                    }
-                    let d = sep.between(pi, [pos.x[j], pos.y[j], pos.z[j]]); // x_i - x_j
+            let inv_hi = load(&f.inv_h);
+            let ki3 = norm * inv_hi * inv_hi * inv_hi;
+            let ci = load(s.c);
+            let (pre_i, inv_rho_i) = (load(&f.pre), load(&f.inv_rho));
+            let alpha_i = if SWITCHED {
+                load(alpha_per)
+            } else {
+                F64s::splat(alpha)
+            };
+            let zero = F64s::splat(0.0);
+            let ci_m = if IAD {
+                [0, 1, 2, 3, 4, 5].map(|c| load(s.iad[c]))
+            } else {
+                [zero; 6]
+            };
+            let mut acc_a = [zero; 3];
+            let mut acc_ep = zero; // sum_j m_j v_ij . A_ij(h_i)
+            let mut acc_eav = zero;
+            let mut acc_div = zero;
+            let mut acc_vsig = ci;
+            for run in union.build(nl, first..first + valid) {
+                assert!(run.end <= n, "neighbour {} of {n} particles", run.end - 1);
+                for j in run.clone() {
+                    let xj = [x[j], y[j], z[j]];
+                    let d = sep.between_lanes(xi, xj); // x_i - x_j
                     let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                    let reach_j = {
+                        let r = support * h[j];
+                        r * r
+                    };
+                    // Lanes whose target has j as neighbour get weight 1,
+                    // the others compute with r = 1 (finite) and weight 0.
+                    let (r2, weight) = neighbour_lanes(r2, reach_i, reach_j);
+                    let mj = m[j] * weight;
                     let inv_r = 1.0 / r2.sqrt();
                     let rr = r2 * inv_r;
-                    let inv_hj = f.inv_h[j];
+                    let inv_hj = inv_h[j];
+                    // A_ij(h_i), A_ij(h_j).
                     let (ai, aj) = if IAD {
                         // A = C (x_j - x_i) W = -(C d) W
-                        let wi = ki3 * kernel.shape(rr * inv_hi);
+                        let wi =
+                            ki3 * F64s::from_array(kernel.shape_lanes(&(rr * inv_hi).to_array()));
                         let kj3 = norm * inv_hj * inv_hj * inv_hj;
-                        let wj = kj3 * kernel.shape(rr * inv_hj);
-                        let cd = mat_vec(&ci_m, d);
+                        let wj =
+                            kj3 * F64s::from_array(kernel.shape_lanes(&(rr * inv_hj).to_array()));
                         let cj = [
-                            s.iad[0][j],
-                            s.iad[1][j],
-                            s.iad[2][j],
-                            s.iad[3][j],
-                            s.iad[4][j],
-                            s.iad[5][j],
+                            F64s::splat(iad[0][j]),
+                            F64s::splat(iad[1][j]),
+                            F64s::splat(iad[2][j]),
+                            F64s::splat(iad[3][j]),
+                            F64s::splat(iad[4][j]),
+                            F64s::splat(iad[5][j]),
                         ];
-                        let cdj = mat_vec(&cj, d);
-                        (
-                            [-cd[0] * wi, -cd[1] * wi, -cd[2] * wi],
-                            [-cdj[0] * wj, -cdj[1] * wj, -cdj[2] * wj],
-                        )
+                        let cd = mat_vec_lanes(&ci_m, d);
+                        let cdj = mat_vec_lanes(&cj, d);
+                        (scale3(cd, -wi), scale3(cdj, -wj))
                     } else {
                         // grad_i W(r, h) = K/h^4 w'(r/h) d / r
-                        let gi = ki3 * inv_hi * kernel.shape_derivative(rr * inv_hi) * inv_r;
+                        let (_, dwi) = kernel.shape_and_derivative_lanes(&(rr * inv_hi).to_array());
+                        let (_, dwj) = kernel.shape_and_derivative_lanes(&(rr * inv_hj).to_array());
+                        let gi = ki3 * inv_hi * F64s::from_array(dwi) * inv_r;
                         let kj4 = norm * inv_hj * inv_hj * inv_hj * inv_hj;
-                        let gj = kj4 * kernel.shape_derivative(rr * inv_hj) * inv_r;
-                        (
-                            [gi * d[0], gi * d[1], gi * d[2]],
-                            [gj * d[0], gj * d[1], gj * d[2]],
-                        )
+                        let gj = kj4 * F64s::from_array(dwj) * inv_r;
+                        (scale3(d, gi), scale3(d, gj))
                     };
-                    let vij = [vi[0] - s.vx[j], vi[1] - s.vy[j], vi[2] - s.vz[j]];
+                    let vij = [vi[0] - vx[j], vi[1] - vy[j], vi[2] - vz[j]];
                     let w = (vij[0] * d[0] + vij[1] * d[1] + vij[2] * d[2]) * inv_r;
-                    let vsig = ci + s.c[j] - 3.0 * w.min(0.0);
-                    vsig_max = vsig_max.max(vsig);
-                    let visc = if w < 0.0 {
-                        let alpha_ij = if SWITCHED {
-                            0.5 * (alpha_i + alpha_per[j])
-                        } else {
-                            alpha
-                        };
-                        -0.5 * alpha_ij * vsig * w
+                    let vsig = ci + cs[j] - 3.0 * w.min(zero);
+                    acc_vsig = acc_vsig.max(vsig * weight);
+                    let alpha_ij = if SWITCHED {
+                        0.5 * (alpha_i + alpha_per[j])
                     } else {
-                        0.0
+                        F64s::splat(alpha)
                     };
-                    let mj = pos.m[j];
-                    let inv_rho_j = f.inv_rho[j];
-                    let (vi_r, vj_r) = (0.5 * visc * inv_rho_i, 0.5 * visc * inv_rho_j);
-                    let (ci_f, cj_f) = (pre_i + vi_r, f.pre[j] + vj_r);
-                    for k in 0..3 {
-                        a[k] -= mj * (ci_f * ai[k] + cj_f * aj[k]);
+                    let visc = w.where_negative(-0.5 * alpha_ij * vsig * w);
+                    let vi_r = 0.5 * visc * inv_rho_i;
+                    let inv_rho_j = inv_rho[j];
+                    let vj_r = 0.5 * visc * inv_rho_j;
+                    let (ci_f, cj_f) = (pre_i + vi_r, pre[j] + vj_r);
+                    for c in 0..3 {
+                        acc_a[c] -= mj * (ci_f * ai[c] + cj_f * aj[c]);
                     }
                     let vai = vij[0] * ai[0] + vij[1] * ai[1] + vij[2] * ai[2];
                     let vaj = vij[0] * aj[0] + vij[1] * aj[1] + vij[2] * aj[2];
-                    e_p += mj * vai;
-                    e_av += mj * (vi_r * vai + vj_r * vaj);
-                    div_v -= mj * inv_rho_j * vai;
+                    acc_ep += mj * vai;
+                    acc_eav += mj * (vi_r * vai + vj_r * vaj);
+                    acc_div -= mj * inv_rho_j * vai;
                 }
             }
-            *ax = a[0];
-            *ay = a[1];
-            *az = a[2];
-            *du = pre_i * e_p + 0.5 * e_av;
-            MomentumStats {
-                min_h_over_vsig: 1.0 / (inv_hi * vsig_max),
-                max_abs_div_v: div_v.abs(),
+            acc_a[0].store(ax);
+            acc_a[1].store(ay);
+            acc_a[2].store(az);
+            (pre_i * acc_ep + 0.5 * acc_eav).store(du);
+            let h_over_vsig = (1.0 / (inv_hi * acc_vsig)).to_array();
+            let div = acc_div.to_array();
+            let mut st = MomentumStats {
+                min_h_over_vsig: f64::INFINITY,
+                max_abs_div_v: 0.0,
+            };
+            for l in 0..valid {
+                st.min_h_over_vsig = st.min_h_over_vsig.min(h_over_vsig[l]);
+                st.max_abs_div_v = st.max_abs_div_v.max(div[l].abs());
             }
+            st
         })
         .reduce(
             || MomentumStats {
@@ -310,7 +355,12 @@ fn pair_loop<K: Kernel, const IAD: bool, const SWITCHED: bool>(
 }
 
 #[inline(always)]
-fn mat_vec(c: &[f64; 6], d: [f64; 3]) -> [f64; 3] {
+fn scale3(v: [F64s; 3], f: F64s) -> [F64s; 3] {
+    [v[0] * f, v[1] * f, v[2] * f]
+}
+
+#[inline(always)]
+fn mat_vec_lanes(c: &[F64s; 6], d: [F64s; 3]) -> [F64s; 3] {
     [
         c[0] * d[0] + c[1] * d[1] + c[2] * d[2],
         c[1] * d[0] + c[3] * d[1] + c[4] * d[2],

@@ -27,6 +27,15 @@ pub enum KernelError {
         min: usize,
     },
 
+    /// A lookup table was asked for with more points than it can index.
+    #[error("a kernel table holds at most {max} points, got {points}")]
+    TooManyPoints {
+        /// The requested number of points.
+        points: usize,
+        /// The maximum ([`crate::Tabulated::MAX_POINTS`]).
+        max: usize,
+    },
+
     /// A kernel reported a support radius that is not finite and positive.
     #[error("kernel support radius must be finite and > 0, got {support}")]
     InvalidSupport {

@@ -5,6 +5,13 @@ use std::sync::Arc;
 
 use crate::gauss::GaussLegendre;
 
+/// How many arguments the lane methods ([`Kernel::shape_lanes`],
+/// [`Kernel::shape_and_derivative_lanes`]) take at once: neighbour loops
+/// work in chunks of this many pairs so the arithmetic vectorises.
+pub const LANES: usize = 8;
+// The lane forms of the tables use `wide::f64x8`.
+const _: () = assert!(LANES == 8);
+
 /// A spherically symmetric SPH smoothing kernel in 3-D.
 ///
 /// Implementors give the dimensionless shape `w(v)`, `v = r/h`, its derivative,
@@ -26,6 +33,26 @@ pub trait Kernel: Send + Sync {
     #[inline]
     fn shape_and_derivative(&self, v: f64) -> (f64, f64) {
         (self.shape(v), self.shape_derivative(v))
+    }
+
+    /// `w(v)` for [`LANES`] arguments. The default calls
+    /// [`shape`](Kernel::shape) per lane; tables override it with a form
+    /// the compiler vectorises. Lane `l` equals `shape(v[l])` bit for bit.
+    #[inline]
+    fn shape_lanes(&self, v: &[f64; LANES]) -> [f64; LANES] {
+        v.map(|x| self.shape(x))
+    }
+
+    /// `(w(v), w'(v))` for [`LANES`] arguments; lane `l` equals
+    /// `shape_and_derivative(v[l])` bit for bit.
+    #[inline]
+    fn shape_and_derivative_lanes(&self, v: &[f64; LANES]) -> ([f64; LANES], [f64; LANES]) {
+        let mut w = [0.0; LANES];
+        let mut dw = [0.0; LANES];
+        for l in 0..LANES {
+            (w[l], dw[l]) = self.shape_and_derivative(v[l]);
+        }
+        (w, dw)
     }
 
     /// Support radius in units of `h` (2.0 for every built-in kernel).
@@ -82,6 +109,17 @@ macro_rules! forward_kernel {
             #[inline]
             fn shape_and_derivative(&self, v: f64) -> (f64, f64) {
                 (**self).shape_and_derivative(v)
+            }
+            #[inline]
+            fn shape_lanes(&self, v: &[f64; LANES]) -> [f64; LANES] {
+                (**self).shape_lanes(v)
+            }
+            #[inline]
+            fn shape_and_derivative_lanes(
+                &self,
+                v: &[f64; LANES],
+            ) -> ([f64; LANES], [f64; LANES]) {
+                (**self).shape_and_derivative_lanes(v)
             }
             #[inline]
             fn support(&self) -> f64 {

@@ -85,7 +85,7 @@ mod wendland;
 
 pub use choice::KernelChoice;
 pub use error::KernelError;
-pub use kernel::{normalisation, Kernel};
+pub use kernel::{normalisation, Kernel, LANES};
 pub use sinc::Sinc;
 pub use spline::CubicSpline;
 pub use table::Tabulated;

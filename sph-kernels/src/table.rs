@@ -2,8 +2,9 @@
 
 use std::fmt;
 
-use crate::kernel::Kernel;
+use crate::kernel::{Kernel, LANES};
 use crate::KernelError;
+use wide::f64x8;
 
 /// Any [`Kernel`] sampled on `points` equally spaced nodes over `[0, support]`
 /// and evaluated by linear interpolation of both the shape and its derivative.
@@ -24,7 +25,7 @@ pub struct Tabulated {
     /// `(points - 1) / support`.
     inv_spacing: f64,
     /// Index of the last interval's left node, `points - 2`.
-    last_interval: usize,
+    last_interval: i32,
     support: f64,
     norm: f64,
 }
@@ -34,6 +35,9 @@ impl Tabulated {
     pub const DEFAULT_POINTS: usize = 20_000;
     /// Fewest points accepted (one interval).
     pub const MIN_POINTS: usize = 2;
+    /// Most points accepted: node indices are `i32`, whose conversions from
+    /// `f64` are single (vectorisable) instructions.
+    pub const MAX_POINTS: usize = i32::MAX as usize;
 
     /// Tabulates `kernel` on `points` nodes over `[0, kernel.support()]`.
     ///
@@ -46,6 +50,12 @@ impl Tabulated {
             return Err(KernelError::TooFewPoints {
                 points,
                 min: Self::MIN_POINTS,
+            });
+        }
+        if points > Self::MAX_POINTS {
+            return Err(KernelError::TooManyPoints {
+                points,
+                max: Self::MAX_POINTS,
             });
         }
         let support = kernel.support();
@@ -74,7 +84,7 @@ impl Tabulated {
         Ok(Self {
             table,
             inv_spacing: 1.0 / spacing,
-            last_interval: points - 2,
+            last_interval: (points - 2) as i32,
             support,
             norm: kernel.norm(),
         })
@@ -87,7 +97,7 @@ impl Tabulated {
 
     /// Node spacing in `v`.
     pub fn spacing(&self) -> f64 {
-        self.support / self.last_interval.saturating_add(1) as f64
+        self.support / f64::from(self.last_interval + 1)
     }
 }
 
@@ -99,6 +109,39 @@ impl fmt::Debug for Tabulated {
             .field("support", &self.support)
             .field("norm", &self.norm)
             .finish_non_exhaustive()
+    }
+}
+
+impl Tabulated {
+    /// The interval holding `v` and the position within it. The clamp to
+    /// `[0, last_interval]` (NaN gives 0) keeps `i + 1` in bounds, so
+    /// out-of-range input never panics.
+    #[inline(always)]
+    fn locate(&self, v: f64) -> (usize, f64) {
+        let t = v * self.inv_spacing;
+        let last = f64::from(self.last_interval);
+        let c = if t > 0.0 { t } else { 0.0 };
+        let c = if c < last { c } else { last };
+        let i = c as i32;
+        (i as usize, t - f64::from(i))
+    }
+
+    /// [`locate`](Self::locate) for a lane: interval indices, positions
+    /// within them, and the mask of arguments inside the support.
+    #[inline(always)]
+    fn locate_lanes(&self, v: &[f64; LANES]) -> ([usize; LANES], f64x8, f64x8) {
+        let zero = f64x8::splat(0.0);
+        let v = f64x8::new(*v);
+        let t = v * f64x8::splat(self.inv_spacing);
+        let last = f64x8::splat(f64::from(self.last_interval));
+        let c = t.simd_gt(zero).select(t, zero);
+        let c = c.simd_lt(last).select(c, last);
+        let i = c.trunc();
+        let mut idx = [0usize; LANES];
+        for (k, &x) in idx.iter_mut().zip(i.as_array()) {
+            *k = x as usize;
+        }
+        (idx, t - i, v.simd_lt(f64x8::splat(self.support)))
     }
 }
 
@@ -115,11 +158,7 @@ impl Kernel for Tabulated {
 
     #[inline]
     fn shape_and_derivative(&self, v: f64) -> (f64, f64) {
-        // `as usize` saturates (negative and NaN give 0), and the `min` keeps
-        // `i + 1` in bounds, so out-of-range input never panics.
-        let t = v * self.inv_spacing;
-        let i = (t as usize).min(self.last_interval);
-        let f = t - i as f64;
+        let (i, f) = self.locate(v);
         let [w0, d0] = self.table[i];
         let [w1, d1] = self.table[i + 1];
         // Not `mul_add`: without an FMA target feature that is a libm call.
@@ -131,6 +170,41 @@ impl Kernel for Tabulated {
         } else {
             (0.0, 0.0)
         }
+    }
+
+    // The lane forms do the index arithmetic and the interpolation as
+    // vector instructions and only the table loads lane by lane; each lane
+    // is the scalar result bit for bit.
+    #[inline(always)]
+    fn shape_lanes(&self, v: &[f64; LANES]) -> [f64; LANES] {
+        let (idx, frac, inside) = self.locate_lanes(v);
+        let mut w0 = [0.0; LANES];
+        let mut w1 = [0.0; LANES];
+        for l in 0..LANES {
+            w0[l] = self.table[idx[l]][0];
+            w1[l] = self.table[idx[l] + 1][0];
+        }
+        let (w0, w1) = (f64x8::new(w0), f64x8::new(w1));
+        let w = w0 + frac * (w1 - w0);
+        inside.select(w, f64x8::splat(0.0)).to_array()
+    }
+
+    #[inline(always)]
+    fn shape_and_derivative_lanes(&self, v: &[f64; LANES]) -> ([f64; LANES], [f64; LANES]) {
+        let (idx, frac, inside) = self.locate_lanes(v);
+        let mut lo = [[0.0; LANES]; 2];
+        let mut hi = [[0.0; LANES]; 2];
+        for l in 0..LANES {
+            let ([w0, d0], [w1, d1]) = (self.table[idx[l]], self.table[idx[l] + 1]);
+            (lo[0][l], lo[1][l], hi[0][l], hi[1][l]) = (w0, d0, w1, d1);
+        }
+        let interp = |a: [f64; LANES], b: [f64; LANES]| {
+            let (a, b) = (f64x8::new(a), f64x8::new(b));
+            inside
+                .select(a + frac * (b - a), f64x8::splat(0.0))
+                .to_array()
+        };
+        (interp(lo[0], hi[0]), interp(lo[1], hi[1]))
     }
 
     #[inline]

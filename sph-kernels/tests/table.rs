@@ -30,7 +30,7 @@
 mod common;
 
 use proptest::prelude::*;
-use sph_kernels::{Kernel, KernelChoice, Tabulated};
+use sph_kernels::{Kernel, KernelChoice, Tabulated, LANES};
 
 /// Error statistics of a table against its source kernel.
 #[derive(Debug, Default)]
@@ -128,5 +128,31 @@ proptest! {
         let (tw, tdw) = table.shape_and_derivative(v);
         prop_assert!((tw - w).abs() < 1e-6, "n = {}, v = {}: {} vs {}", n, v, tw, w);
         prop_assert!((tdw - dw).abs() < 1e-6, "n = {}, v = {}: {} vs {}", n, v, tdw, dw);
+    }
+
+    /// The lane forms are the scalar forms bit for bit, in and out of range
+    /// (negative, beyond the support, infinite, NaN), for tables and for the
+    /// exact kernels' default lane methods alike.
+    #[test]
+    fn lanes_equal_scalar_bit_for_bit(
+        n in 3.0f64..=12.0,
+        v in proptest::array::uniform8(prop_oneof![
+            4 => 0.0f64..2.2,
+            1 => prop::num::f64::ANY,
+        ]),
+    ) {
+        let exact = KernelChoice::Sinc(n).exact().unwrap();
+        let table = KernelChoice::Sinc(n).tabulate(Tabulated::DEFAULT_POINTS).unwrap();
+        let kernels: [&dyn Kernel; 2] = [&table, exact.as_ref()];
+        for k in kernels {
+            let w = k.shape_lanes(&v);
+            let (w2, dw) = k.shape_and_derivative_lanes(&v);
+            for l in 0..LANES {
+                let (sw, sdw) = k.shape_and_derivative(v[l]);
+                prop_assert_eq!(w[l].to_bits(), k.shape(v[l]).to_bits(), "v = {}", v[l]);
+                prop_assert_eq!(w2[l].to_bits(), sw.to_bits(), "v = {}", v[l]);
+                prop_assert_eq!(dw[l].to_bits(), sdw.to_bits(), "v = {}", v[l]);
+            }
+        }
     }
 }
