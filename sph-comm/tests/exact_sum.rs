@@ -309,7 +309,7 @@ fn a_million_tenths() {
     let m = (0.1f64 * 2f64.powi(56)) as i128;
     assert_eq!(m as f64 * 2f64.powi(-56), 0.1);
     let want = (m * 1_000_000) as f64 * 2f64.powi(-56);
-    let got: ExactSum = std::iter::repeat(0.1).take(1_000_000).collect();
+    let got: ExactSum = std::iter::repeat_n(0.1, 1_000_000).collect();
     assert_eq!(got.value(), want);
 }
 

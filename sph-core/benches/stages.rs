@@ -49,7 +49,12 @@ fn setup() -> (Particles, BoundingBox, CompactNeighborList) {
     apply_permutation(&perm, &mut keys, &mut Vec::new());
     let tree = Octree::build(&keys, &p.x, &p.y, &p.z, 16).unwrap();
     let mut list = CompactNeighborList::new();
-    NeighborSearch::default()
+    // Grouped lists, as the solver builds them.
+    let search = NeighborSearch {
+        grouped: true,
+        ..NeighborSearch::default()
+    };
+    search
         .find_compact(&tree, &bbox, &p.x, &p.y, &p.z, &p.h, 0..n, &mut list)
         .unwrap();
     (p, bbox, list)

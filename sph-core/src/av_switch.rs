@@ -381,6 +381,7 @@ fn indicator<K: Kernel, const IAD: bool>(
     let vi = [flow.vx[i], flow.vy[i], flow.vz[i]];
     let (hi, ci, div_i) = (pos.h[i], flow.c[i], div_v[i]);
     let (inv_h, k3) = inv_h_and_norm(kernel, hi);
+    let support = kernel.support();
     // s = sum_j V_j w_j (div_j - div_i) d
     let mut s = [0.0; 3];
     let mut v_sig = ci;
@@ -390,7 +391,14 @@ fn indicator<K: Kernel, const IAD: bool>(
                 continue;
             }
             let d = sep.between(pi, [pos.x[j], pos.y[j], pos.z[j]]);
-            let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            // Grouped lists hold the group's union: only pairs within
+            // either support count for the signal velocity.
+            let (ri, rj) = (support * hi, support * pos.h[j]);
+            if !(r2 < ri * ri || r2 < rj * rj) {
+                continue;
+            }
+            let r = r2.sqrt();
             let vij = [vi[0] - flow.vx[j], vi[1] - flow.vy[j], vi[2] - flow.vz[j]];
             let w_ij = (vij[0] * d[0] + vij[1] * d[1] + vij[2] * d[2]) / r;
             v_sig = v_sig.max(ci + flow.c[j] - 3.0 * w_ij.min(0.0));

@@ -5,6 +5,7 @@
 
 use crate::density::Positions;
 use crate::geometry::Separation;
+use crate::lanes::{F64s, GroupUnion, LANES};
 use rayon::prelude::*;
 use sph_kernels::Kernel;
 use sph_tree::{BoundingBox, CompactNeighborList};
@@ -60,28 +61,41 @@ pub fn iad<K: Kernel>(
     let sep = Separation::new(bbox);
     let targets = nl.targets();
     let norm = kernel.norm();
+    let n = pos.x.len();
+    let (x, y, z, m, rho) = (
+        &pos.x[..n],
+        &pos.y[..n],
+        &pos.z[..n],
+        &pos.m[..n],
+        &rho[..n],
+    );
     let [c0, c1, c2, c3, c4, c5] = c;
     let range = targets.clone();
+    // Targets in groups of LANES over the union of their lists: partners
+    // beyond 2 h_i add W = 0, so each lane is the scalar sum over its list.
     let bad = (
-        c0[range.clone()].par_iter_mut(),
-        c1[range.clone()].par_iter_mut(),
-        c2[range.clone()].par_iter_mut(),
-        c3[range.clone()].par_iter_mut(),
-        c4[range.clone()].par_iter_mut(),
-        c5[range].par_iter_mut(),
+        c0[range.clone()].par_chunks_mut(LANES),
+        c1[range.clone()].par_chunks_mut(LANES),
+        c2[range.clone()].par_chunks_mut(LANES),
+        c3[range.clone()].par_chunks_mut(LANES),
+        c4[range.clone()].par_chunks_mut(LANES),
+        c5[range].par_chunks_mut(LANES),
     )
         .into_par_iter()
         .enumerate()
-        .filter_map(|(k, out)| {
-            let i = targets.start + k;
-            let pi = [pos.x[i], pos.y[i], pos.z[i]];
-            let inv_h = 1.0 / pos.h[i];
-            let mut t = [0.0; 6];
-            for run in nl.runs(i) {
-                for j in run {
-                    let d = sep.between(pi, [pos.x[j], pos.y[j], pos.z[j]]);
+        .map_init(GroupUnion::default, |union, (g, out)| {
+            let first = targets.start + g * LANES;
+            let valid = out.0.len();
+            let load = |a: &[f64]| F64s::load(a, first, valid);
+            let xi = [load(x), load(y), load(z)];
+            let inv_h = 1.0 / load(pos.h);
+            let mut t = [F64s::splat(0.0); 6];
+            for run in union.build(nl, first..first + valid) {
+                assert!(run.end <= n, "neighbour {} of {n} particles", run.end - 1);
+                for j in run.clone() {
+                    let d = sep.between_lanes(xi, [x[j], y[j], z[j]]);
                     let v = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() * inv_h;
-                    let w = pos.m[j] / rho[j] * kernel.shape(v);
+                    let w = m[j] / rho[j] * F64s::from_array(kernel.shape_lanes(&v.to_array()));
                     t[0] += w * d[0] * d[0];
                     t[1] += w * d[0] * d[1];
                     t[2] += w * d[0] * d[2];
@@ -91,28 +105,25 @@ pub fn iad<K: Kernel>(
                 }
             }
             let k3 = norm * inv_h * inv_h * inv_h;
-            let t = t.map(|v| v * k3);
-            match invert_symmetric(t) {
-                Ok(inv) => {
-                    *out.0 = inv[0];
-                    *out.1 = inv[1];
-                    *out.2 = inv[2];
-                    *out.3 = inv[3];
-                    *out.4 = inv[4];
-                    *out.5 = inv[5];
-                    None
-                }
-                Err(det) => {
-                    *out.0 = 0.0;
-                    *out.1 = 0.0;
-                    *out.2 = 0.0;
-                    *out.3 = 0.0;
-                    *out.4 = 0.0;
-                    *out.5 = 0.0;
-                    Some(Singular { index: i, det })
+            let t = t.map(|v| (v * k3).to_array());
+            let mut out = [out.0, out.1, out.2, out.3, out.4, out.5];
+            let mut first_bad = None;
+            for l in 0..valid {
+                let tl = [t[0][l], t[1][l], t[2][l], t[3][l], t[4][l], t[5][l]];
+                let inv = invert_symmetric(tl).unwrap_or_else(|det| {
+                    first_bad = first_bad.or(Some(Singular {
+                        index: first + l,
+                        det,
+                    }));
+                    [0.0; 6]
+                });
+                for (o, v) in out.iter_mut().zip(inv) {
+                    o[l] = v;
                 }
             }
+            first_bad
         })
+        .flatten()
         .min_by_key(|s| s.index);
     match bad {
         Some(s) => Err(s),

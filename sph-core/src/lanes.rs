@@ -20,6 +20,8 @@
 //! gives.
 
 pub use sph_kernels::LANES;
+// Grouped neighbour lists are built for this lane width.
+const _: () = assert!(LANES == sph_tree::GROUP_LANES);
 use sph_tree::CompactNeighborList;
 use std::ops::{Add, AddAssign, Div, Mul, Neg, Range, Sub, SubAssign};
 use wide::f64x8;
@@ -187,11 +189,17 @@ pub struct GroupUnion {
 }
 
 impl GroupUnion {
-    /// Builds the union of the lists of `group` (targets of `nl`): each
-    /// list is already a sorted run list, so the union is a chain of linear
-    /// merges (a few times cheaper than sorting all runs).
+    /// The union of the lists of `group` (targets of `nl`, starting at a
+    /// multiple of [`LANES`] from the first target). Grouped lists
+    /// ([`NeighborSearch::grouped`](sph_tree::NeighborSearch::grouped))
+    /// hold it already; per-target lists are merged, each already a sorted
+    /// run list, by a chain of linear merges.
     pub fn build(&mut self, nl: &CompactNeighborList, group: Range<usize>) -> &[Range<usize>] {
         self.union.clear();
+        if nl.width() == LANES {
+            self.union.extend(nl.runs(group.start));
+            return &self.union;
+        }
         for i in group {
             self.runs.clear();
             self.runs.extend(nl.runs(i));

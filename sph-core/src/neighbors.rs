@@ -67,8 +67,11 @@ pub fn find_neighbors(
 ) -> Result<NeighborStats, CoreError> {
     // Symmetric lists: a pair interacts through both W(h_i) and W(h_j), so
     // both partners must list each other for the forces to stay antisymmetric.
+    // Grouped lists: the pair loops take LANES consecutive targets per
+    // vector over the union of their lists.
     let search = NeighborSearch {
         symmetric: true,
+        grouped: true,
         ..NeighborSearch::default()
     };
     let hu = params.h_update(h_update);

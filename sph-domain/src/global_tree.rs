@@ -66,7 +66,7 @@ impl GlobalTree {
             let size = self.starts[i + 1] - start;
             let level = self.level(i);
             let parent_size = size << 3;
-            let first_child = level > 0 && start % parent_size == 0;
+            let first_child = level > 0 && start.is_multiple_of(parent_size);
             if first_child
                 && i + 8 <= n
                 && self.starts[i + 8] == start + parent_size

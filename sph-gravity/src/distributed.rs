@@ -220,7 +220,7 @@ pub fn range_cells(
         let mut level = 0;
         loop {
             let size = 1u64 << (3 * (MAX_LEVEL - level));
-            if lo % size == 0 && lo + size <= hi {
+            if lo.is_multiple_of(size) && lo + size <= hi {
                 break;
             }
             level += 1;

@@ -14,11 +14,13 @@ use std::ops::Range;
 #[derive(Debug, Clone, Default)]
 pub struct CompactNeighborList {
     pub(crate) targets: Range<usize>,
-    // First target of each chunk, ascending.
+    // Targets per list: 1, or GROUP_LANES for grouped lists (0 reads as 1).
+    pub(crate) width: usize,
+    // First list of each chunk, ascending.
     pub(crate) chunk_first: Vec<usize>,
     // Encoded runs of each chunk (buffers kept between searches).
     pub(crate) chunks: Vec<Vec<u8>>,
-    // Byte offset of each target's list within its chunk.
+    // Byte offset of each list within its chunk.
     pub(crate) start: Vec<u32>,
     // One-sided neighbour counts (within support * h_i).
     pub(crate) counts: Vec<u32>,
@@ -38,23 +40,34 @@ impl CompactNeighborList {
         self.targets.clone()
     }
 
+    /// Targets sharing one list: 1, or [`GROUP_LANES`](crate::GROUP_LANES)
+    /// for lists built with [`NeighborSearch::grouped`](crate::NeighborSearch::grouped).
+    #[inline]
+    pub fn width(&self) -> usize {
+        self.width.max(1)
+    }
+
     /// Neighbour count of target `i` within `support * h_i`, self included.
     #[inline]
     pub fn count(&self, i: usize) -> usize {
         self.counts[i - self.targets.start] as usize
     }
 
-    /// The neighbours of target `i` as ascending runs of consecutive indices.
+    /// The neighbours of target `i` as ascending runs of consecutive
+    /// indices. For grouped lists ([`width`](Self::width) > 1) these are the
+    /// neighbours of any target of `i`'s group: a superset of `i`'s own,
+    /// the same for every target of the group.
     #[inline]
     pub fn runs(&self, i: usize) -> Runs<'_> {
-        let k = i - self.targets.start;
-        let c = self.chunk_first[..self.n_chunks].partition_point(|&f| f <= i) - 1;
+        let w = self.width();
+        let k = (i - self.targets.start) / w;
+        let c = self.chunk_first[..self.n_chunks].partition_point(|&f| f <= k) - 1;
         let buf = &self.chunks[c];
         let a = self.start[k] as usize;
         let last_in_chunk = if c + 1 < self.n_chunks {
-            self.chunk_first[c + 1] == i + 1
+            self.chunk_first[c + 1] == k + 1
         } else {
-            i + 1 == self.targets.end
+            k + 1 == self.start.len()
         };
         let b = if last_in_chunk {
             buf.len()
@@ -63,7 +76,7 @@ impl CompactNeighborList {
         };
         Runs {
             bytes: &buf[a..b],
-            prev_end: i,
+            prev_end: self.targets.start + k * w,
         }
     }
 
@@ -74,7 +87,7 @@ impl CompactNeighborList {
     }
 
     /// Number of listed neighbours of `i` (at least [`count`](Self::count)
-    /// for symmetric searches).
+    /// for symmetric searches; the group's for grouped lists).
     pub fn listed(&self, i: usize) -> usize {
         self.runs(i).map(|r| r.len()).sum()
     }

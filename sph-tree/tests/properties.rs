@@ -4,7 +4,7 @@ use proptest::prelude::*;
 use sph_tree::sfc::{hilbert_decode, hilbert_encode, morton_decode, morton_encode};
 use sph_tree::{
     apply_permutation, compute_keys, Boundary, BoundingBox, Curve, KeySorter, NeighborList,
-    NeighborSearch, Octree, CELLS_PER_AXIS, MAX_LEVEL,
+    NeighborSearch, Octree, CELLS_PER_AXIS, GROUP_LANES, MAX_LEVEL,
 };
 
 const MASK: u32 = CELLS_PER_AXIS - 1;
@@ -306,6 +306,38 @@ proptest! {
             prop_assert_eq!(&got[..], csr.neighbors(i), "particle {}", i);
             prop_assert_eq!(compact.count(i), csr.count(i));
             prop_assert_eq!(compact.listed(i), csr.neighbors(i).len());
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(16))]
+
+    /// A grouped list is exactly the union of the per-target lists of its
+    /// GROUP_LANES targets (counted from the first target), the same for
+    /// each of them, and the counts are the per-target counts.
+    #[test]
+    fn grouped_lists_are_unions(seed in any::<u64>(), n in 1usize..1500, periodic in any::<bool>(), symmetric in any::<bool>(), lo in 0usize..200) {
+        let s = make_set(n, seed, Layout::Uniform, periodic, 4.0);
+        let tree = Octree::build(&s.keys, &s.x, &s.y, &s.z, 8).unwrap();
+        let single = NeighborSearch { symmetric, ..Default::default() };
+        let grouped = NeighborSearch { grouped: true, ..single };
+        let targets = lo.min(n)..n;
+        let mut one = sph_tree::CompactNeighborList::new();
+        let a = single.find_compact(&tree, &s.bbox, &s.x, &s.y, &s.z, &s.h, targets.clone(), &mut one).unwrap();
+        let mut group = sph_tree::CompactNeighborList::new();
+        let b = grouped.find_compact(&tree, &s.bbox, &s.x, &s.y, &s.z, &s.h, targets.clone(), &mut group).unwrap();
+        prop_assert_eq!(a, b);
+        prop_assert_eq!(group.width(), GROUP_LANES);
+        for i in targets.clone() {
+            let g0 = targets.start + (i - targets.start) / GROUP_LANES * GROUP_LANES;
+            let members = g0..(g0 + GROUP_LANES).min(targets.end);
+            let mut union: Vec<usize> = members.flat_map(|t| one.neighbors(t).collect::<Vec<_>>()).collect();
+            union.sort_unstable();
+            union.dedup();
+            let got: Vec<usize> = group.neighbors(i).collect();
+            prop_assert_eq!(&got, &union, "particle {}", i);
+            prop_assert_eq!(group.count(i), one.count(i));
         }
     }
 }

@@ -21,7 +21,7 @@ pub fn analytic_kernels() -> Vec<(String, Box<dyn Kernel>)> {
 
 /// `∫_a^b f` by composite Simpson with `intervals` (even) sub-intervals.
 pub fn simpson(f: impl Fn(f64) -> f64, a: f64, b: f64, intervals: usize) -> f64 {
-    assert!(intervals % 2 == 0);
+    assert!(intervals.is_multiple_of(2));
     let h = (b - a) / intervals as f64;
     let inner: f64 = (1..intervals)
         .map(|i| {
