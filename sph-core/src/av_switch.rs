@@ -99,10 +99,12 @@
 
 use crate::density::Positions;
 use crate::geometry::Separation;
+use crate::lanes::{neighbour_lanes, F64s, GroupUnion, LANES};
 use crate::momentum::{Gradients, HydroState};
 use rayon::prelude::*;
 use sph_kernels::Kernel;
 use sph_tree::{BoundingBox, CompactNeighborList};
+use std::ops::Range;
 
 /// Parameters of the viscosity switch (defaults: SPH-EXA's).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -235,51 +237,59 @@ impl<'a> From<HydroState<'a>> for FlowState<'a> {
     }
 }
 
-/// Kernel factors of target `i`: `K/h^3` and `1/h`.
+/// Weight of the pair term `d = x_i - x_j` before the final factors, for
+/// a lane of targets at distances `r` (`r > 0`): with IAD `W` shape (the
+/// gradient is `-C d W`), plain `S'(v) / r` (the gradient is
+/// `K/h^4 S'(v) d / r`). Lanes at `r = 0` (the target itself) get 0.
 #[inline(always)]
-fn inv_h_and_norm<K: Kernel>(kernel: &K, h: f64) -> (f64, f64) {
-    let inv_h = 1.0 / h;
-    (inv_h, kernel.norm() * inv_h * inv_h * inv_h)
-}
-
-/// Weight of the pair term `d = x_i - x_j` before the final factors: with
-/// IAD `W` shape (the gradient is `-C d W`), plain `S'(v) / r` (the
-/// gradient is `K/h^4 S'(v) d / r`).
-#[inline(always)]
-fn pair_weight<K: Kernel, const IAD: bool>(kernel: &K, r: f64, inv_h: f64) -> f64 {
+fn pair_weight<K: Kernel, const IAD: bool>(kernel: &K, r: F64s, inv_h: F64s) -> F64s {
+    let v = (r * inv_h).to_array();
     if IAD {
-        kernel.shape(r * inv_h)
+        F64s::from_array(kernel.shape_lanes(&v))
     } else {
-        kernel.shape_derivative(r * inv_h) / r
+        let zero = F64s::splat(0.0);
+        let r_safe = F64s::select_positive(r, r, F64s::splat(1.0));
+        let w = F64s::from_array(kernel.shape_and_derivative_lanes(&v).1) / r_safe;
+        F64s::select_positive(r, w, zero)
     }
 }
 
-#[inline(always)]
-fn iad_of(flow: &FlowState<'_>, i: usize) -> [f64; 6] {
-    std::array::from_fn(|k| flow.iad[k][i])
+/// A group of [`LANES`] consecutive targets, padded with the last one.
+#[derive(Clone, Copy)]
+struct Group {
+    first: usize,
+    valid: usize,
 }
 
-/// Velocity gradient `G_ab = d_a v_b` of target `i`.
+impl Group {
+    #[inline(always)]
+    fn load(&self, a: &[f64]) -> F64s {
+        F64s::load(a, self.first, self.valid)
+    }
+}
+
+/// Velocity gradient `G_ab = d_a v_b` of a group of targets, one per lane.
 #[inline(always)]
 fn velocity_gradient<K: Kernel, const IAD: bool>(
     kernel: &K,
     sep: &Separation,
     flow: &FlowState<'_>,
-    nl: &CompactNeighborList,
-    i: usize,
-) -> [[f64; 3]; 3] {
+    union: &[Range<usize>],
+    g: Group,
+) -> [[F64s; 3]; 3] {
     let pos = flow.pos;
-    let pi = [pos.x[i], pos.y[i], pos.z[i]];
-    let vi = [flow.vx[i], flow.vy[i], flow.vz[i]];
-    let (inv_h, k3) = inv_h_and_norm(kernel, pos.h[i]);
+    let n = pos.x.len();
+    let xi = [g.load(pos.x), g.load(pos.y), g.load(pos.z)];
+    let vi = [g.load(flow.vx), g.load(flow.vy), g.load(flow.vz)];
+    let inv_h = 1.0 / g.load(pos.h);
+    let k3 = kernel.norm() * inv_h * inv_h * inv_h;
     // m[c][b] = sum_j V_j w_j d_c (v_j - v_i)_b
-    let mut m = [[0.0; 3]; 3];
-    for run in nl.runs(i) {
-        for j in run {
-            if j == i {
-                continue;
-            }
-            let d = sep.between(pi, [pos.x[j], pos.y[j], pos.z[j]]);
+    let zero = F64s::splat(0.0);
+    let mut m = [[zero; 3]; 3];
+    for run in union {
+        assert!(run.end <= n, "neighbour {} of {n} particles", run.end - 1);
+        for j in run.clone() {
+            let d = sep.between_lanes(xi, [pos.x[j], pos.y[j], pos.z[j]]);
             let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
             let w = pos.m[j] / flow.rho[j] * pair_weight::<K, IAD>(kernel, r, inv_h);
             let dv = [flow.vx[j] - vi[0], flow.vy[j] - vi[1], flow.vz[j] - vi[2]];
@@ -293,13 +303,16 @@ fn velocity_gradient<K: Kernel, const IAD: bool>(
     }
     if IAD {
         // A_ij = -C d W: G = -K/h^3 C m
-        let c = iad_of(flow, i);
+        let c = [0, 1, 2, 3, 4, 5].map(|k| g.load(flow.iad[k]));
         let rows = [[c[0], c[1], c[2]], [c[1], c[3], c[4]], [c[2], c[4], c[5]]];
-        std::array::from_fn(|a| {
-            std::array::from_fn(|b| {
-                -k3 * (rows[a][0] * m[0][b] + rows[a][1] * m[1][b] + rows[a][2] * m[2][b])
-            })
-        })
+        let mut out = [[zero; 3]; 3];
+        for a in 0..3 {
+            for b in 0..3 {
+                out[a][b] =
+                    -k3 * (rows[a][0] * m[0][b] + rows[a][1] * m[1][b] + rows[a][2] * m[2][b]);
+            }
+        }
+        out
     } else {
         // A_ij = K/h^4 S' d / r: G = K/h^4 m
         let k4 = k3 * inv_h;
@@ -345,27 +358,40 @@ fn divergence_loop<K: Kernel, const IAD: bool>(
 ) {
     let sep = Separation::new(bbox);
     let targets = nl.targets();
-    let div_t = &mut div_v[targets.clone()];
-    if curl_v.is_empty() {
-        div_t.par_iter_mut().enumerate().for_each(|(k, dv)| {
-            let g = velocity_gradient::<K, IAD>(kernel, &sep, &flow, nl, targets.start + k);
-            *dv = g[0][0] + g[1][1] + g[2][2];
-        });
+    let with_curl = !curl_v.is_empty();
+    let div_t = div_v[targets.clone()].par_chunks_mut(LANES);
+    // Without a curl, one-element stand-ins keep a single loop.
+    let mut none = vec![0.0; targets.len().div_ceil(LANES)];
+    let curl_t = if with_curl {
+        curl_v[targets.clone()].par_chunks_mut(LANES)
     } else {
-        div_t
-            .par_iter_mut()
-            .zip(curl_v[targets.clone()].par_iter_mut())
-            .enumerate()
-            .for_each(|(k, (dv, cv))| {
-                let g = velocity_gradient::<K, IAD>(kernel, &sep, &flow, nl, targets.start + k);
-                *dv = g[0][0] + g[1][1] + g[2][2];
-                let curl = [g[1][2] - g[2][1], g[2][0] - g[0][2], g[0][1] - g[1][0]];
-                *cv = (curl[0] * curl[0] + curl[1] * curl[1] + curl[2] * curl[2]).sqrt();
-            });
-    }
+        none.par_chunks_mut(1)
+    };
+    div_t
+        .zip(curl_t)
+        .enumerate()
+        .for_each_init(GroupUnion::default, |union, (k, (dv, cv))| {
+            let g = Group {
+                first: targets.start + k * LANES,
+                valid: dv.len(),
+            };
+            let runs = union.build(nl, g.first..g.first + g.valid);
+            let gr = velocity_gradient::<K, IAD>(kernel, &sep, &flow, runs, g);
+            (gr[0][0] + gr[1][1] + gr[2][2]).store(dv);
+            if with_curl {
+                let curl = [
+                    gr[1][2] - gr[2][1],
+                    gr[2][0] - gr[0][2],
+                    gr[0][1] - gr[1][0],
+                ];
+                (curl[0] * curl[0] + curl[1] * curl[1] + curl[2] * curl[2])
+                    .sqrt()
+                    .store(cv);
+            }
+        });
 }
 
-/// `(alpha_loc, v_sig)` of target `i`.
+/// `(alpha_loc, v_sig)` of a group of targets, one per lane.
 #[inline(always)]
 fn indicator<K: Kernel, const IAD: bool>(
     kernel: &K,
@@ -373,45 +399,53 @@ fn indicator<K: Kernel, const IAD: bool>(
     flow: &FlowState<'_>,
     div_v: &[f64],
     params: &AvSwitchParams,
-    nl: &CompactNeighborList,
-    i: usize,
-) -> (f64, f64) {
+    union: &[Range<usize>],
+    g: Group,
+) -> ([f64; LANES], [f64; LANES]) {
     let pos = flow.pos;
-    let pi = [pos.x[i], pos.y[i], pos.z[i]];
-    let vi = [flow.vx[i], flow.vy[i], flow.vz[i]];
-    let (hi, ci, div_i) = (pos.h[i], flow.c[i], div_v[i]);
-    let (inv_h, k3) = inv_h_and_norm(kernel, hi);
+    let n = pos.x.len();
+    let xi = [g.load(pos.x), g.load(pos.y), g.load(pos.z)];
+    let vi = [g.load(flow.vx), g.load(flow.vy), g.load(flow.vz)];
+    let (hi, ci, div_i) = (g.load(pos.h), g.load(flow.c), g.load(div_v));
+    let inv_h = 1.0 / hi;
+    let k3 = kernel.norm() * inv_h * inv_h * inv_h;
     let support = kernel.support();
+    let reach_i = {
+        let r = support * hi;
+        r * r
+    };
+    let zero = F64s::splat(0.0);
     // s = sum_j V_j w_j (div_j - div_i) d
-    let mut s = [0.0; 3];
+    let mut s = [zero; 3];
     let mut v_sig = ci;
-    for run in nl.runs(i) {
-        for j in run {
-            if j == i {
-                continue;
-            }
-            let d = sep.between(pi, [pos.x[j], pos.y[j], pos.z[j]]);
+    for run in union {
+        assert!(run.end <= n, "neighbour {} of {n} particles", run.end - 1);
+        for j in run.clone() {
+            let d = sep.between_lanes(xi, [pos.x[j], pos.y[j], pos.z[j]]);
             let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-            // Grouped lists hold the group's union: only pairs within
-            // either support count for the signal velocity.
-            let (ri, rj) = (support * hi, support * pos.h[j]);
-            if !(r2 < ri * ri || r2 < rj * rj) {
-                continue;
-            }
+            // Pairs within either support (the lists' criterion), not
+            // the target itself; the other lanes compute with r = 1.
+            let reach_j = {
+                let r = support * pos.h[j];
+                r * r
+            };
+            let (r2, pair) = neighbour_lanes(r2, reach_i, reach_j);
             let r = r2.sqrt();
             let vij = [vi[0] - flow.vx[j], vi[1] - flow.vy[j], vi[2] - flow.vz[j]];
             let w_ij = (vij[0] * d[0] + vij[1] * d[1] + vij[2] * d[2]) / r;
-            v_sig = v_sig.max(ci + flow.c[j] - 3.0 * w_ij.min(0.0));
+            let vs = ci + flow.c[j] - 3.0 * w_ij.min(zero);
+            v_sig = v_sig.max(vs * pair);
             let f = pos.m[j] / flow.rho[j]
                 * pair_weight::<K, IAD>(kernel, r, inv_h)
-                * (div_v[j] - div_i);
+                * (div_v[j] - div_i)
+                * pair;
             for (sk, dk) in s.iter_mut().zip(d) {
                 *sk += f * dk;
             }
         }
     }
-    let g = if IAD {
-        let c = iad_of(flow, i);
+    let gd = if IAD {
+        let c = [0, 1, 2, 3, 4, 5].map(|k| g.load(flow.iad[k]));
         let cs = [
             c[0] * s[0] + c[1] * s[1] + c[2] * s[2],
             c[1] * s[0] + c[3] * s[1] + c[4] * s[2],
@@ -421,7 +455,14 @@ fn indicator<K: Kernel, const IAD: bool>(
     } else {
         k3 * inv_h * (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt()
     };
-    (params.local_alpha(div_i, g, hi, ci), v_sig)
+    let (gd, h, c, dv) = (
+        gd.to_array(),
+        hi.to_array(),
+        ci.to_array(),
+        div_i.to_array(),
+    );
+    let alpha_loc = std::array::from_fn(|l| params.local_alpha(dv[l], gd[l], h[l], c[l]));
+    (alpha_loc, v_sig.to_array())
 }
 
 /// The shock indicator of every target of `nl`: the local target
@@ -470,12 +511,18 @@ fn indicator_loop<K: Kernel, const IAD: bool>(
     let sep = Separation::new(bbox);
     let targets = nl.targets();
     alpha_loc[targets.clone()]
-        .par_iter_mut()
-        .zip(v_sig[targets.clone()].par_iter_mut())
+        .par_chunks_mut(LANES)
+        .zip(v_sig[targets.clone()].par_chunks_mut(LANES))
         .enumerate()
-        .for_each(|(k, (al, vs))| {
-            (*al, *vs) =
-                indicator::<K, IAD>(kernel, &sep, &flow, div_v, params, nl, targets.start + k);
+        .for_each_init(GroupUnion::default, |union, (k, (al, vs))| {
+            let g = Group {
+                first: targets.start + k * LANES,
+                valid: al.len(),
+            };
+            let runs = union.build(nl, g.first..g.first + g.valid);
+            let (a, v) = indicator::<K, IAD>(kernel, &sep, &flow, div_v, params, runs, g);
+            al.copy_from_slice(&a[..g.valid]);
+            vs.copy_from_slice(&v[..g.valid]);
         });
 }
 
@@ -528,12 +575,19 @@ fn update_loop<K: Kernel, const IAD: bool>(
     let sep = Separation::new(bbox);
     let targets = nl.targets();
     alpha[targets.clone()]
-        .par_iter_mut()
+        .par_chunks_mut(LANES)
         .enumerate()
-        .for_each(|(k, a)| {
-            let i = targets.start + k;
-            let (alpha_loc, v_sig) = indicator::<K, IAD>(kernel, &sep, &flow, div_v, params, nl, i);
-            let tau = params.decay_time(flow.pos.h[i], v_sig);
-            *a = params.advance(*a, alpha_loc, tau, dt);
+        .for_each_init(GroupUnion::default, |union, (k, a)| {
+            let g = Group {
+                first: targets.start + k * LANES,
+                valid: a.len(),
+            };
+            let runs = union.build(nl, g.first..g.first + g.valid);
+            let (alpha_loc, v_sig) =
+                indicator::<K, IAD>(kernel, &sep, &flow, div_v, params, runs, g);
+            for (l, a) in a.iter_mut().enumerate() {
+                let tau = params.decay_time(flow.pos.h[g.first + l], v_sig[l]);
+                *a = params.advance(*a, alpha_loc[l], tau, dt);
+            }
         });
 }

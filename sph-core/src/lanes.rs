@@ -97,6 +97,12 @@ impl F64s {
         Self(above.select(self.0 - l, below.select(self.0 + l, self.0)))
     }
 
+    /// `a` where `m > 0`, else `b`.
+    #[inline(always)]
+    pub fn select_positive(m: Self, a: Self, b: Self) -> Self {
+        Self(m.0.simd_gt(f64x8::splat(0.0)).select(a.0, b.0))
+    }
+
     /// `a` where `self < 0`, else 0.
     #[inline(always)]
     pub fn where_negative(self, a: Self) -> Self {
