@@ -14,6 +14,7 @@
 
 use crate::density::Positions;
 use crate::geometry::Separation;
+use crate::lanes::{F64s, GroupUnion, LANES};
 use rayon::prelude::*;
 use sph_kernels::Kernel;
 use sph_tree::{BoundingBox, CompactNeighborList};
@@ -70,32 +71,44 @@ pub fn conduction<K: Kernel>(
     let sep = Separation::new(bbox);
     let targets = nl.targets();
     let norm = kernel.norm();
+    let n = pos.x.len();
+    // Targets in groups of LANES over the union of their lists; partners
+    // outside both supports (and the target itself) add exact zeros.
     du[targets.clone()]
-        .par_iter_mut()
+        .par_chunks_mut(LANES)
         .enumerate()
-        .for_each(|(k, du_i)| {
-            let i = targets.start + k;
-            let pi = [pos.x[i], pos.y[i], pos.z[i]];
-            let inv_hi = 1.0 / pos.h[i];
-            let ki4 = norm * inv_hi.powi(4);
-            let mut sum = 0.0;
-            for run in nl.runs(i) {
-                for j in run {
-                    if j == i {
-                        continue;
-                    }
-                    let d = sep.between(pi, [pos.x[j], pos.y[j], pos.z[j]]);
+        .for_each_init(GroupUnion::default, |union, (k, du_g)| {
+            let first = targets.start + k * LANES;
+            let valid = du_g.len();
+            let load = |a: &[f64]| F64s::load(a, first, valid);
+            let xi = [load(pos.x), load(pos.y), load(pos.z)];
+            let inv_hi = 1.0 / load(pos.h);
+            let ih2 = inv_hi * inv_hi;
+            let ki4 = norm * (ih2 * ih2);
+            let (rho_i, p_i, u_i) = (load(rho), load(p), load(u));
+            let mut sum = F64s::splat(0.0);
+            for run in union.build(nl, first..first + valid) {
+                assert!(run.end <= n, "neighbour {} of {n} particles", run.end - 1);
+                for j in run.clone() {
+                    let d = sep.between_lanes(xi, [pos.x[j], pos.y[j], pos.z[j]]);
                     let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
                     let inv_hj = 1.0 / pos.h[j];
                     let kj4 = norm * inv_hj.powi(4);
-                    let dw = 0.5
-                        * (ki4 * kernel.shape_derivative(r * inv_hi)
-                            + kj4 * kernel.shape_derivative(r * inv_hj));
-                    let rho_ij = 0.5 * (rho[i] + rho[j]);
-                    let v_u = ((p[i] - p[j]).abs() / rho_ij).sqrt();
-                    sum += pos.m[j] * v_u * (u[i] - u[j]) / rho_ij * dw;
+                    let wi = kernel
+                        .shape_and_derivative_lanes(&(r * inv_hi).to_array())
+                        .1;
+                    let wj = kernel
+                        .shape_and_derivative_lanes(&(r * inv_hj).to_array())
+                        .1;
+                    let dw = 0.5 * (ki4 * F64s::from_array(wi) + kj4 * F64s::from_array(wj));
+                    let rho_ij = 0.5 * (rho_i + rho[j]);
+                    let v_u = ((p_i - p[j]).abs() / rho_ij).sqrt();
+                    sum += pos.m[j] * v_u * (u_i - u[j]) / rho_ij * dw;
                 }
             }
-            *du_i += alpha_u * sum;
+            let add = (alpha_u * sum).to_array();
+            for (d, a) in du_g.iter_mut().zip(add) {
+                *d += a;
+            }
         });
 }

@@ -68,6 +68,12 @@ impl F64s {
         out.copy_from_slice(&self.to_array()[..out.len()]);
     }
 
+    /// Absolute value per lane.
+    #[inline(always)]
+    pub fn abs(self) -> Self {
+        Self(self.0.abs())
+    }
+
     /// Square root per lane.
     #[inline(always)]
     pub fn sqrt(self) -> Self {
