@@ -239,7 +239,7 @@ fn planned_sends(round: u64, src: usize, size: usize) -> Vec<(usize, Vec<u64>)> 
         };
         for c in 0..copies {
             let hl = hash(&[h, c]);
-            let len = if hl % 29 == 0 {
+            let len = if hl.is_multiple_of(29) {
                 20_000
             } else {
                 (hl % 6) as usize
@@ -255,7 +255,7 @@ fn check_sparse_exchange(comm: &MpiComm) {
     let (rank, size) = (comm.rank(), comm.size());
     for round in 0..300u64 {
         // Skew the ranks now and then so that some are an exchange ahead.
-        if hash(&[round, rank as u64, 99]) % 16 == 0 {
+        if hash(&[round, rank as u64, 99]).is_multiple_of(16) {
             std::thread::sleep(Duration::from_millis(2));
         }
         let sends = planned_sends(round, rank, size);
@@ -380,7 +380,7 @@ fn global_values(set: u64) -> Vec<f64> {
     let mut v: Vec<f64> = (0..3072u64)
         .map(|i| {
             let h = hash(&[set, i]);
-            if h % 4 == 0 {
+            if h.is_multiple_of(4) {
                 // Any finite double below 1e200 (tiny and subnormal included).
                 let x = f64::from_bits(hash(&[h]));
                 if x.is_finite() && x.abs() < 1e200 {
