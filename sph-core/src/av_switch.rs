@@ -98,7 +98,7 @@
 //! ```
 
 use crate::density::Positions;
-use crate::geometry::Separation;
+use crate::geometry::{max_reach, Separation};
 use crate::lanes::{neighbour_lanes, F64s, GroupUnion, LANES};
 use crate::momentum::{Gradients, HydroState};
 use rayon::prelude::*;
@@ -276,10 +276,12 @@ fn velocity_gradient<K: Kernel, const IAD: bool>(
     flow: &FlowState<'_>,
     union: &[Range<usize>],
     g: Group,
+    reach: f64,
 ) -> [[F64s; 3]; 3] {
     let pos = flow.pos;
     let n = pos.x.len();
     let xi = [g.load(pos.x), g.load(pos.y), g.load(pos.z)];
+    let sep = sep.for_group(xi, reach);
     let vi = [g.load(flow.vx), g.load(flow.vy), g.load(flow.vz)];
     let inv_h = 1.0 / g.load(pos.h);
     let k3 = kernel.norm() * inv_h * inv_h * inv_h;
@@ -357,6 +359,7 @@ fn divergence_loop<K: Kernel, const IAD: bool>(
     curl_v: &mut [f64],
 ) {
     let sep = Separation::new(bbox);
+    let reach = max_reach(kernel.support(), flow.pos.h);
     let targets = nl.targets();
     let with_curl = !curl_v.is_empty();
     let div_t = div_v[targets.clone()].par_chunks_mut(LANES);
@@ -376,7 +379,7 @@ fn divergence_loop<K: Kernel, const IAD: bool>(
                 valid: dv.len(),
             };
             let runs = union.build(nl, g.first..g.first + g.valid);
-            let gr = velocity_gradient::<K, IAD>(kernel, &sep, &flow, runs, g);
+            let gr = velocity_gradient::<K, IAD>(kernel, &sep, &flow, runs, g, reach);
             (gr[0][0] + gr[1][1] + gr[2][2]).store(dv);
             if with_curl {
                 let curl = [
@@ -401,10 +404,12 @@ fn indicator<K: Kernel, const IAD: bool>(
     params: &AvSwitchParams,
     union: &[Range<usize>],
     g: Group,
+    reach: f64,
 ) -> ([f64; LANES], [f64; LANES]) {
     let pos = flow.pos;
     let n = pos.x.len();
     let xi = [g.load(pos.x), g.load(pos.y), g.load(pos.z)];
+    let sep = sep.for_group(xi, reach);
     let vi = [g.load(flow.vx), g.load(flow.vy), g.load(flow.vz)];
     let (hi, ci, div_i) = (g.load(pos.h), g.load(flow.c), g.load(div_v));
     let inv_h = 1.0 / hi;
@@ -509,6 +514,7 @@ fn indicator_loop<K: Kernel, const IAD: bool>(
     v_sig: &mut [f64],
 ) {
     let sep = Separation::new(bbox);
+    let reach = max_reach(kernel.support(), flow.pos.h);
     let targets = nl.targets();
     alpha_loc[targets.clone()]
         .par_chunks_mut(LANES)
@@ -520,7 +526,7 @@ fn indicator_loop<K: Kernel, const IAD: bool>(
                 valid: al.len(),
             };
             let runs = union.build(nl, g.first..g.first + g.valid);
-            let (a, v) = indicator::<K, IAD>(kernel, &sep, &flow, div_v, params, runs, g);
+            let (a, v) = indicator::<K, IAD>(kernel, &sep, &flow, div_v, params, runs, g, reach);
             al.copy_from_slice(&a[..g.valid]);
             vs.copy_from_slice(&v[..g.valid]);
         });
@@ -573,6 +579,7 @@ fn update_loop<K: Kernel, const IAD: bool>(
     alpha: &mut [f64],
 ) {
     let sep = Separation::new(bbox);
+    let reach = max_reach(kernel.support(), flow.pos.h);
     let targets = nl.targets();
     alpha[targets.clone()]
         .par_chunks_mut(LANES)
@@ -584,7 +591,7 @@ fn update_loop<K: Kernel, const IAD: bool>(
             };
             let runs = union.build(nl, g.first..g.first + g.valid);
             let (alpha_loc, v_sig) =
-                indicator::<K, IAD>(kernel, &sep, &flow, div_v, params, runs, g);
+                indicator::<K, IAD>(kernel, &sep, &flow, div_v, params, runs, g, reach);
             for (l, a) in a.iter_mut().enumerate() {
                 let tau = params.decay_time(flow.pos.h[g.first + l], v_sig[l]);
                 *a = params.advance(*a, alpha_loc[l], tau, dt);

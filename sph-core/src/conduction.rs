@@ -13,7 +13,7 @@
 //! the conductivity is on, after the momentum stage.
 
 use crate::density::Positions;
-use crate::geometry::Separation;
+use crate::geometry::{max_reach, Separation};
 use crate::lanes::{F64s, GroupUnion, LANES};
 use rayon::prelude::*;
 use sph_kernels::Kernel;
@@ -69,6 +69,7 @@ pub fn conduction<K: Kernel>(
     du: &mut [f64],
 ) {
     let sep = Separation::new(bbox);
+    let reach = max_reach(kernel.support(), pos.h);
     let targets = nl.targets();
     let norm = kernel.norm();
     let n = pos.x.len();
@@ -82,6 +83,7 @@ pub fn conduction<K: Kernel>(
             let valid = du_g.len();
             let load = |a: &[f64]| F64s::load(a, first, valid);
             let xi = [load(pos.x), load(pos.y), load(pos.z)];
+            let sep = sep.for_group(xi, reach);
             let inv_hi = 1.0 / load(pos.h);
             let ih2 = inv_hi * inv_hi;
             let ki4 = norm * (ih2 * ih2);

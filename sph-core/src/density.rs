@@ -1,6 +1,6 @@
 //! Density by kernel summation and the grad-h factor Omega.
 
-use crate::geometry::Separation;
+use crate::geometry::{max_reach, Separation};
 use crate::lanes::{F64s, GroupUnion, LANES};
 use rayon::prelude::*;
 use sph_kernels::Kernel;
@@ -35,6 +35,7 @@ pub fn density<K: Kernel>(
     omega: &mut [f64],
 ) {
     let sep = Separation::new(bbox);
+    let reach = max_reach(kernel.support(), pos.h);
     let targets = nl.targets();
     let norm = kernel.norm();
     let with_omega = !omega.is_empty();
@@ -47,6 +48,7 @@ pub fn density<K: Kernel>(
         let valid = r.len();
         let load = |a: &[f64]| F64s::load(a, first, valid);
         let xi = [load(x), load(y), load(z)];
+        let sep = sep.for_group(xi, reach);
         let inv_h = 1.0 / load(pos.h);
         let zero = F64s::splat(0.0);
         let (mut sum_w, mut sum_dh) = (zero, zero);

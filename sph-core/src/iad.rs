@@ -4,7 +4,7 @@
 //! fields.
 
 use crate::density::Positions;
-use crate::geometry::Separation;
+use crate::geometry::{max_reach, Separation};
 use crate::lanes::{F64s, GroupUnion, LANES};
 use rayon::prelude::*;
 use sph_kernels::Kernel;
@@ -59,6 +59,7 @@ pub fn iad<K: Kernel>(
     c: &mut [Vec<f64>; 6],
 ) -> Result<(), Singular> {
     let sep = Separation::new(bbox);
+    let reach = max_reach(kernel.support(), pos.h);
     let targets = nl.targets();
     let norm = kernel.norm();
     let n = pos.x.len();
@@ -88,6 +89,7 @@ pub fn iad<K: Kernel>(
             let valid = out.0.len();
             let load = |a: &[f64]| F64s::load(a, first, valid);
             let xi = [load(x), load(y), load(z)];
+            let sep = sep.for_group(xi, reach);
             let inv_h = 1.0 / load(pos.h);
             let mut t = [F64s::splat(0.0); 6];
             for run in union.build(nl, first..first + valid) {

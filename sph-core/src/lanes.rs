@@ -68,6 +68,20 @@ impl F64s {
         out.copy_from_slice(&self.to_array()[..out.len()]);
     }
 
+    /// The smallest lane.
+    #[inline(always)]
+    pub fn min_lane(self) -> f64 {
+        self.to_array().into_iter().fold(f64::INFINITY, f64::min)
+    }
+
+    /// The largest lane.
+    #[inline(always)]
+    pub fn max_lane(self) -> f64 {
+        self.to_array()
+            .into_iter()
+            .fold(f64::NEG_INFINITY, f64::max)
+    }
+
     /// Absolute value per lane.
     #[inline(always)]
     pub fn abs(self) -> Self {

@@ -23,7 +23,7 @@
 //! balances the kinetic energy change exactly, and viscosity only heats.
 
 use crate::density::Positions;
-use crate::geometry::Separation;
+use crate::geometry::{max_reach, Separation};
 use crate::lanes::{neighbour_lanes, F64s, GroupUnion, LANES};
 use rayon::prelude::*;
 use sph_kernels::Kernel;
@@ -191,6 +191,7 @@ fn pair_loop<K: Kernel, const IAD: bool, const SWITCHED: bool>(
     out: Rates<'_>,
 ) -> MomentumStats {
     let sep = Separation::new(bbox);
+    let reach = max_reach(kernel.support(), s.pos.h);
     let targets = nl.targets();
     let norm = kernel.norm();
     let support = kernel.support();
@@ -232,6 +233,7 @@ fn pair_loop<K: Kernel, const IAD: bool, const SWITCHED: bool>(
             let valid = ax.len();
             let load = |a: &[f64]| F64s::load(a, first, valid);
             let xi = [load(pos.x), load(pos.y), load(pos.z)];
+            let sep = sep.for_group(xi, reach);
             let vi = [load(s.vx), load(s.vy), load(s.vz)];
             let reach_i = {
                 let r = support * load(pos.h);
