@@ -109,13 +109,28 @@ fn benches(c: &mut Criterion) {
                 black_box(st.total)
             })
         });
+        let compact_bytes = compact.bytes();
+        // One list per 8 targets (the SIMD pair loops' lists).
+        let grouped = NeighborSearch {
+            grouped: true,
+            ..symmetric
+        };
+        g.bench_function("neighbors_100_compact_symmetric_grouped", |b| {
+            b.iter(|| {
+                let st = grouped
+                    .find_compact(&tree, &s.bbox, &s.x, &s.y, &s.z, &s.h, 0..n, &mut compact)
+                    .unwrap();
+                black_box(st.total)
+            })
+        });
         let st = search
             .find(&tree, &s.bbox, &s.x, &s.y, &s.z, &s.h, 0..n, &mut list)
             .unwrap();
         eprintln!(
-            "{label}: mean neighbours {:.1}, bytes per particle: CSR lists {:.1}, compact lists {:.1}; tree nodes {}",
+            "{label}: mean neighbours {:.1}, bytes per particle: CSR lists {:.1}, compact lists {:.1}, grouped compact lists {:.1}; tree nodes {}",
             st.total as f64 / n as f64,
             list.bytes() as f64 / n as f64,
+            compact_bytes as f64 / n as f64,
             compact.bytes() as f64 / n as f64,
             tree.num_nodes()
         );
