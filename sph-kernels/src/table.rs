@@ -155,8 +155,9 @@ impl Tabulated {
             // lane of `node` is an integer k in [0, last_interval], so the
             // flat offsets 2k + col and 2k + 2 + col (col <= 1) are at most
             // 2 last_interval + 3 = 2 points - 1: inside the table. Two
-            // gathers replace sixteen scalar loads: density 1e5 (1 thread)
-            // ??? -> ??? ms.
+            // gathers replace sixteen scalar loads; criterion stages_1e5,
+            // 1 thread, scalar loads -> gathers: IAD 95 -> 71 ms, momentum
+            // 191 -> 162 ms, density 102 -> 99 ms.
             unsafe {
                 let k = _mm512_cvttpd_epi32(__m512d::from(node));
                 let k2 = _mm256_add_epi32(k, k);
