@@ -98,13 +98,13 @@
 //! ```
 
 use crate::density::Positions;
-use crate::geometry::{max_reach, Separation};
-use crate::lanes::{neighbour_lanes, F64s, GroupUnion, LANES};
 use crate::momentum::{Gradients, HydroState};
-use rayon::prelude::*;
+use crate::pair_loop::{
+    neighbour_lanes, sym_mat_vec, with_gradients, F64s, Group, PairLoop, PairStage, WithGradients,
+    LANES,
+};
 use sph_kernels::Kernel;
 use sph_tree::{BoundingBox, CompactNeighborList};
-use std::ops::Range;
 
 /// Parameters of the viscosity switch (defaults: SPH-EXA's).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -243,82 +243,128 @@ impl<'a> From<HydroState<'a>> for FlowState<'a> {
 /// `K/h^4 S'(v) d / r`). Lanes at `r = 0` (the target itself) get 0.
 #[inline(always)]
 fn pair_weight<K: Kernel, const IAD: bool>(kernel: &K, r: F64s, inv_h: F64s) -> F64s {
-    let v = (r * inv_h).to_array();
+    let v = r * inv_h;
     if IAD {
-        F64s::from_array(kernel.shape_lanes(&v))
+        kernel.shape_lanes(v)
     } else {
         let zero = F64s::splat(0.0);
         let r_safe = F64s::select_positive(r, r, F64s::splat(1.0));
-        let w = F64s::from_array(kernel.shape_and_derivative_lanes(&v).1) / r_safe;
+        let w = kernel.shape_and_derivative_lanes(v).1 / r_safe;
         F64s::select_positive(r, w, zero)
     }
 }
 
-/// A group of [`LANES`] consecutive targets, padded with the last one.
-#[derive(Clone, Copy)]
-struct Group {
-    first: usize,
-    valid: usize,
+/// What the switch stages read of every particle, cut to one length.
+struct Flow<'a, K> {
+    kernel: &'a K,
+    norm: f64,
+    support: f64,
+    h: &'a [f64],
+    m: &'a [f64],
+    v: [&'a [f64]; 3],
+    rho: &'a [f64],
+    c: &'a [f64],
+    iad: [&'a [f64]; 6],
 }
 
-impl Group {
-    #[inline(always)]
-    fn load(&self, a: &[f64]) -> F64s {
-        F64s::load(a, self.first, self.valid)
+impl<'a, K: Kernel> Flow<'a, K> {
+    fn new(kernel: &'a K, flow: &FlowState<'a>, iad: bool) -> Self {
+        let n = flow.pos.x.len();
+        let cut = |a: &'a [f64]| &a[..n];
+        Self {
+            kernel,
+            norm: kernel.norm(),
+            support: kernel.support(),
+            h: cut(flow.pos.h),
+            m: cut(flow.pos.m),
+            v: [cut(flow.vx), cut(flow.vy), cut(flow.vz)],
+            rho: cut(flow.rho),
+            c: if flow.c.is_empty() {
+                flow.c
+            } else {
+                cut(flow.c)
+            },
+            iad: if iad { flow.iad.map(cut) } else { [&[]; 6] },
+        }
+    }
+
+    fn driver(
+        bbox: &BoundingBox,
+        kernel: &K,
+        flow: &FlowState<'a>,
+        nl: &'a CompactNeighborList,
+    ) -> PairLoop<'a> {
+        let pos = flow.pos;
+        PairLoop::new(bbox, kernel.support(), [pos.x, pos.y, pos.z], pos.h, nl)
+            .expect("AV switches: positions")
     }
 }
 
-/// Velocity gradient `G_ab = d_a v_b` of a group of targets, one per lane.
-#[inline(always)]
-fn velocity_gradient<K: Kernel, const IAD: bool>(
-    kernel: &K,
-    sep: &Separation,
-    flow: &FlowState<'_>,
-    union: &[Range<usize>],
-    g: Group,
-    reach: f64,
-) -> [[F64s; 3]; 3] {
-    let pos = flow.pos;
-    let n = pos.x.len();
-    let xi = [g.load(pos.x), g.load(pos.y), g.load(pos.z)];
-    let sep = sep.for_group(xi, reach);
-    let vi = [g.load(flow.vx), g.load(flow.vy), g.load(flow.vz)];
-    let inv_h = 1.0 / g.load(pos.h);
-    let k3 = kernel.norm() * inv_h * inv_h * inv_h;
-    // m[c][b] = sum_j V_j w_j d_c (v_j - v_i)_b
-    let zero = F64s::splat(0.0);
-    let mut m = [[zero; 3]; 3];
-    for run in union {
-        assert!(run.end <= n, "neighbour {} of {n} particles", run.end - 1);
-        for j in run.clone() {
-            let d = sep.between_lanes(xi, [pos.x[j], pos.y[j], pos.z[j]]);
-            let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-            let w = pos.m[j] / flow.rho[j] * pair_weight::<K, IAD>(kernel, r, inv_h);
-            let dv = [flow.vx[j] - vi[0], flow.vy[j] - vi[1], flow.vz[j] - vi[2]];
-            for (mc, dc) in m.iter_mut().zip(d) {
-                let wd = w * dc;
-                for (mcb, dvb) in mc.iter_mut().zip(dv) {
-                    *mcb += wd * dvb;
+/// Velocity gradient `G_ab = d_a v_b` of every target: `div v` and,
+/// optionally, `|curl v|`.
+struct VelocityGradient<'a, K, const IAD: bool>(Flow<'a, K>);
+
+/// A group's velocities, `1/h` and `m[c][b] = sum_j V_j w_j d_c (v_j - v_i)_b`.
+type GradientSums = ([F64s; 3], F64s, [[F64s; 3]; 3]);
+
+impl<K: Kernel, const IAD: bool> PairStage for VelocityGradient<'_, K, IAD> {
+    type Sums = GradientSums;
+    type Out<'o> = ([&'o mut [f64]; 1], Option<[&'o mut [f64]; 1]>);
+    type Stats = ();
+
+    #[inline(always)]
+    fn start(&self, g: &Group) -> GradientSums {
+        let f = &self.0;
+        let vi = f.v.map(|v| g.load(v));
+        (vi, 1.0 / g.load(f.h), [[F64s::splat(0.0); 3]; 3])
+    }
+
+    #[inline(always)]
+    fn pair(&self, (vi, inv_h, m): &mut GradientSums, j: usize, d: [F64s; 3], r2: F64s) {
+        let f = &self.0;
+        let r = r2.sqrt();
+        let w = f.m[j] / f.rho[j] * pair_weight::<K, IAD>(f.kernel, r, *inv_h);
+        let dv = [f.v[0][j] - vi[0], f.v[1][j] - vi[1], f.v[2][j] - vi[2]];
+        for (mc, dc) in m.iter_mut().zip(d) {
+            let wd = w * dc;
+            for (mcb, dvb) in mc.iter_mut().zip(dv) {
+                *mcb += wd * dvb;
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn finish(&self, g: &Group, (_, inv_h, m): GradientSums, ([dv], cv): Self::Out<'_>) {
+        let f = &self.0;
+        let k3 = f.norm * inv_h * inv_h * inv_h;
+        let zero = F64s::splat(0.0);
+        let gr = if IAD {
+            // A_ij = -C d W: G = -K/h^3 C m
+            let c = f.iad.map(|c| g.load(c));
+            let mut out = [[zero; 3]; 3];
+            for b in 0..3 {
+                let col = sym_mat_vec(&c, [m[0][b], m[1][b], m[2][b]]);
+                for a in 0..3 {
+                    out[a][b] = -k3 * col[a];
                 }
             }
+            out
+        } else {
+            // A_ij = K/h^4 S' d / r: G = K/h^4 m
+            let k4 = k3 * inv_h;
+            m.map(|row| row.map(|v| k4 * v))
+        };
+        (gr[0][0] + gr[1][1] + gr[2][2]).store(dv);
+        if let Some([cv]) = cv {
+            let curl = [
+                gr[1][2] - gr[2][1],
+                gr[2][0] - gr[0][2],
+                gr[0][1] - gr[1][0],
+            ];
+            (curl[0] * curl[0] + curl[1] * curl[1] + curl[2] * curl[2])
+                .sqrt()
+                .store(cv);
         }
-    }
-    if IAD {
-        // A_ij = -C d W: G = -K/h^3 C m
-        let c = [0, 1, 2, 3, 4, 5].map(|k| g.load(flow.iad[k]));
-        let rows = [[c[0], c[1], c[2]], [c[1], c[3], c[4]], [c[2], c[4], c[5]]];
-        let mut out = [[zero; 3]; 3];
-        for a in 0..3 {
-            for b in 0..3 {
-                out[a][b] =
-                    -k3 * (rows[a][0] * m[0][b] + rows[a][1] * m[1][b] + rows[a][2] * m[2][b]);
-            }
-        }
-        out
-    } else {
-        // A_ij = K/h^4 S' d / r: G = K/h^4 m
-        let k4 = k3 * inv_h;
-        m.map(|row| row.map(|v| k4 * v))
     }
 }
 
@@ -335,6 +381,9 @@ fn velocity_gradient<K: Kernel, const IAD: bool>(
 /// ([`Gradients::Kernel`]). Reads positions, `h`, `m`, `rho`, `v` of the
 /// targets and their neighbours and `C` of the targets; writes
 /// `div_v[i]` (and `curl_v[i]`) for the targets only.
+///
+/// # Panics
+/// If the arrays differ in length or do not cover the lists.
 pub fn velocity_divergence<K: Kernel>(
     kernel: &K,
     bbox: &BoundingBox,
@@ -344,130 +393,225 @@ pub fn velocity_divergence<K: Kernel>(
     div_v: &mut [f64],
     curl_v: &mut [f64],
 ) {
-    match gradients {
-        Gradients::Iad => divergence_loop::<K, true>(kernel, bbox, flow, nl, div_v, curl_v),
-        Gradients::Kernel => divergence_loop::<K, false>(kernel, bbox, flow, nl, div_v, curl_v),
+    struct Run<'a, K> {
+        kernel: &'a K,
+        bbox: &'a BoundingBox,
+        flow: FlowState<'a>,
+        nl: &'a CompactNeighborList,
+        div_v: &'a mut [f64],
+        curl_v: &'a mut [f64],
+    }
+    impl<K: Kernel> WithGradients for Run<'_, K> {
+        type Output = ();
+        fn run<const IAD: bool>(self) {
+            let driver = Flow::driver(self.bbox, self.kernel, &self.flow, self.nl);
+            let stage = VelocityGradient::<K, IAD>(Flow::new(self.kernel, &self.flow, IAD));
+            let r = self.nl.targets();
+            let curl = (!self.curl_v.is_empty()).then(|| [&mut self.curl_v[r.clone()]]);
+            driver.run(&stage, ([&mut self.div_v[r]], curl));
+        }
+    }
+    let run = Run {
+        kernel,
+        bbox,
+        flow,
+        nl,
+        div_v,
+        curl_v,
+    };
+    with_gradients(gradients, run);
+}
+
+/// The shock indicator's sums: `grad(div v)` and the signal velocity.
+struct Indicator<'a, K, const IAD: bool> {
+    flow: Flow<'a, K>,
+    div_v: &'a [f64],
+    params: AvSwitchParams,
+}
+
+/// One group's target values and sums in the indicator loop.
+struct IndicatorSums {
+    vi: [F64s; 3],
+    hi: F64s,
+    ci: F64s,
+    div_i: F64s,
+    inv_h: F64s,
+    reach_i: F64s,
+    /// `sum_j V_j w_j (div_j - div_i) d`
+    s: [F64s; 3],
+    v_sig: F64s,
+}
+
+impl<K: Kernel, const IAD: bool> Indicator<'_, K, IAD> {
+    #[inline(always)]
+    fn start(&self, g: &Group) -> IndicatorSums {
+        let f = &self.flow;
+        let hi = g.load(f.h);
+        let ci = g.load(f.c);
+        let reach_i = {
+            let r = f.support * hi;
+            r * r
+        };
+        IndicatorSums {
+            vi: f.v.map(|v| g.load(v)),
+            hi,
+            ci,
+            div_i: g.load(self.div_v),
+            inv_h: 1.0 / hi,
+            reach_i,
+            s: [F64s::splat(0.0); 3],
+            v_sig: ci,
+        }
+    }
+
+    #[inline(always)]
+    fn pair(&self, t: &mut IndicatorSums, j: usize, d: [F64s; 3], r2: F64s) {
+        let f = &self.flow;
+        let zero = F64s::splat(0.0);
+        // Pairs within either support (the lists' criterion), not the
+        // target itself; the other lanes compute with r = 1.
+        let reach_j = {
+            let r = f.support * f.h[j];
+            r * r
+        };
+        let (r2, pair) = neighbour_lanes(r2, t.reach_i, reach_j);
+        let r = r2.sqrt();
+        let vi = t.vi;
+        let vij = [vi[0] - f.v[0][j], vi[1] - f.v[1][j], vi[2] - f.v[2][j]];
+        let w_ij = (vij[0] * d[0] + vij[1] * d[1] + vij[2] * d[2]) / r;
+        let vs = t.ci + f.c[j] - 3.0 * w_ij.min(zero);
+        t.v_sig = t.v_sig.max(vs * pair);
+        let w = f.m[j] / f.rho[j]
+            * pair_weight::<K, IAD>(f.kernel, r, t.inv_h)
+            * (self.div_v[j] - t.div_i)
+            * pair;
+        for (sk, dk) in t.s.iter_mut().zip(d) {
+            *sk += w * dk;
+        }
+    }
+
+    /// `(alpha_loc, v_sig)` of the group's lanes.
+    #[inline(always)]
+    fn finish(&self, g: &Group, t: IndicatorSums) -> ([f64; LANES], [f64; LANES]) {
+        let f = &self.flow;
+        let k3 = f.norm * t.inv_h * t.inv_h * t.inv_h;
+        let s = t.s;
+        let gd = if IAD {
+            let c = f.iad.map(|c| g.load(c));
+            let cs = sym_mat_vec(&c, s);
+            k3 * (cs[0] * cs[0] + cs[1] * cs[1] + cs[2] * cs[2]).sqrt()
+        } else {
+            k3 * t.inv_h * (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt()
+        };
+        let (gd, h, c, dv) = (
+            gd.to_array(),
+            t.hi.to_array(),
+            t.ci.to_array(),
+            t.div_i.to_array(),
+        );
+        let alpha_loc = std::array::from_fn(|l| self.params.local_alpha(dv[l], gd[l], h[l], c[l]));
+        (alpha_loc, t.v_sig.to_array())
     }
 }
 
-fn divergence_loop<K: Kernel, const IAD: bool>(
-    kernel: &K,
-    bbox: &BoundingBox,
-    flow: FlowState<'_>,
-    nl: &CompactNeighborList,
-    div_v: &mut [f64],
-    curl_v: &mut [f64],
-) {
-    let sep = Separation::new(bbox);
-    let reach = max_reach(kernel.support(), flow.pos.h);
-    let targets = nl.targets();
-    let with_curl = !curl_v.is_empty();
-    let div_t = div_v[targets.clone()].par_chunks_mut(LANES);
-    // Without a curl, one-element stand-ins keep a single loop.
-    let mut none = vec![0.0; targets.len().div_ceil(LANES)];
-    let curl_t = if with_curl {
-        curl_v[targets.clone()].par_chunks_mut(LANES)
-    } else {
-        none.par_chunks_mut(1)
-    };
-    div_t
-        .zip(curl_t)
-        .enumerate()
-        .for_each_init(GroupUnion::default, |union, (k, (dv, cv))| {
-            let g = Group {
-                first: targets.start + k * LANES,
-                valid: dv.len(),
-            };
-            let runs = union.build(nl, g.first..g.first + g.valid);
-            let gr = velocity_gradient::<K, IAD>(kernel, &sep, &flow, runs, g, reach);
-            (gr[0][0] + gr[1][1] + gr[2][2]).store(dv);
-            if with_curl {
-                let curl = [
-                    gr[1][2] - gr[2][1],
-                    gr[2][0] - gr[0][2],
-                    gr[0][1] - gr[1][0],
-                ];
-                (curl[0] * curl[0] + curl[1] * curl[1] + curl[2] * curl[2])
-                    .sqrt()
-                    .store(cv);
-            }
-        });
+/// The indicator written out: `alpha_loc` and `v_sig` per target.
+struct ShockIndicator<'a, K, const IAD: bool>(Indicator<'a, K, IAD>);
+
+impl<K: Kernel, const IAD: bool> PairStage for ShockIndicator<'_, K, IAD> {
+    type Sums = IndicatorSums;
+    type Out<'o> = [&'o mut [f64]; 2];
+    type Stats = ();
+
+    #[inline(always)]
+    fn start(&self, g: &Group) -> IndicatorSums {
+        self.0.start(g)
+    }
+
+    #[inline(always)]
+    fn pair(&self, t: &mut IndicatorSums, j: usize, d: [F64s; 3], r2: F64s) {
+        self.0.pair(t, j, d, r2);
+    }
+
+    #[inline(always)]
+    fn finish(&self, g: &Group, t: IndicatorSums, [al, vs]: Self::Out<'_>) {
+        let (a, v) = self.0.finish(g, t);
+        al.copy_from_slice(&a[..g.valid]);
+        vs.copy_from_slice(&v[..g.valid]);
+    }
 }
 
-/// `(alpha_loc, v_sig)` of a group of targets, one per lane.
-#[inline(always)]
-fn indicator<K: Kernel, const IAD: bool>(
-    kernel: &K,
-    sep: &Separation,
-    flow: &FlowState<'_>,
-    div_v: &[f64],
-    params: &AvSwitchParams,
-    union: &[Range<usize>],
-    g: Group,
-    reach: f64,
-) -> ([f64; LANES], [f64; LANES]) {
-    let pos = flow.pos;
-    let n = pos.x.len();
-    let xi = [g.load(pos.x), g.load(pos.y), g.load(pos.z)];
-    let sep = sep.for_group(xi, reach);
-    let vi = [g.load(flow.vx), g.load(flow.vy), g.load(flow.vz)];
-    let (hi, ci, div_i) = (g.load(pos.h), g.load(flow.c), g.load(div_v));
-    let inv_h = 1.0 / hi;
-    let k3 = kernel.norm() * inv_h * inv_h * inv_h;
-    let support = kernel.support();
-    let reach_i = {
-        let r = support * hi;
-        r * r
-    };
-    let zero = F64s::splat(0.0);
-    // s = sum_j V_j w_j (div_j - div_i) d
-    let mut s = [zero; 3];
-    let mut v_sig = ci;
-    for run in union {
-        assert!(run.end <= n, "neighbour {} of {n} particles", run.end - 1);
-        for j in run.clone() {
-            let d = sep.between_lanes(xi, [pos.x[j], pos.y[j], pos.z[j]]);
-            let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-            // Pairs within either support (the lists' criterion), not
-            // the target itself; the other lanes compute with r = 1.
-            let reach_j = {
-                let r = support * pos.h[j];
-                r * r
-            };
-            let (r2, pair) = neighbour_lanes(r2, reach_i, reach_j);
-            let r = r2.sqrt();
-            let vij = [vi[0] - flow.vx[j], vi[1] - flow.vy[j], vi[2] - flow.vz[j]];
-            let w_ij = (vij[0] * d[0] + vij[1] * d[1] + vij[2] * d[2]) / r;
-            let vs = ci + flow.c[j] - 3.0 * w_ij.min(zero);
-            v_sig = v_sig.max(vs * pair);
-            let f = pos.m[j] / flow.rho[j]
-                * pair_weight::<K, IAD>(kernel, r, inv_h)
-                * (div_v[j] - div_i)
-                * pair;
-            for (sk, dk) in s.iter_mut().zip(d) {
-                *sk += f * dk;
+/// The indicator applied: `alpha` advanced over `dt` per target.
+struct AlphaUpdate<'a, K, const IAD: bool> {
+    indicator: Indicator<'a, K, IAD>,
+    dt: f64,
+}
+
+impl<K: Kernel, const IAD: bool> PairStage for AlphaUpdate<'_, K, IAD> {
+    type Sums = IndicatorSums;
+    type Out<'o> = [&'o mut [f64]; 1];
+    type Stats = ();
+
+    #[inline(always)]
+    fn start(&self, g: &Group) -> IndicatorSums {
+        self.indicator.start(g)
+    }
+
+    #[inline(always)]
+    fn pair(&self, t: &mut IndicatorSums, j: usize, d: [F64s; 3], r2: F64s) {
+        self.indicator.pair(t, j, d, r2);
+    }
+
+    #[inline(always)]
+    fn finish(&self, g: &Group, t: IndicatorSums, [alpha]: Self::Out<'_>) {
+        let (alpha_loc, v_sig) = self.indicator.finish(g, t);
+        let p = &self.indicator.params;
+        let h = self.indicator.flow.h;
+        for (l, a) in alpha.iter_mut().enumerate() {
+            let tau = p.decay_time(h[g.first + l], v_sig[l]);
+            *a = p.advance(*a, alpha_loc[l], tau, self.dt);
+        }
+    }
+}
+
+/// What one indicator pass writes: `(alpha_loc, v_sig)` or `alpha`
+/// advanced over `dt`.
+enum IndicatorOut<'a> {
+    Indicator(&'a mut [f64], &'a mut [f64]),
+    Advance(&'a mut [f64], f64),
+}
+
+/// The arguments of one indicator pass, run for one gradient operator.
+struct IndicatorRun<'a, K> {
+    kernel: &'a K,
+    bbox: &'a BoundingBox,
+    flow: FlowState<'a>,
+    div_v: &'a [f64],
+    params: AvSwitchParams,
+    nl: &'a CompactNeighborList,
+    out: IndicatorOut<'a>,
+}
+
+impl<K: Kernel> WithGradients for IndicatorRun<'_, K> {
+    type Output = ();
+
+    fn run<const IAD: bool>(self) {
+        let driver = Flow::driver(self.bbox, self.kernel, &self.flow, self.nl);
+        let n = self.flow.pos.x.len();
+        let indicator = Indicator::<K, IAD> {
+            flow: Flow::new(self.kernel, &self.flow, IAD),
+            div_v: &self.div_v[..n],
+            params: self.params,
+        };
+        let r = self.nl.targets();
+        match self.out {
+            IndicatorOut::Indicator(al, vs) => {
+                driver.run(&ShockIndicator(indicator), [&mut al[r.clone()], &mut vs[r]])
+            }
+            IndicatorOut::Advance(alpha, dt) => {
+                driver.run(&AlphaUpdate { indicator, dt }, [&mut alpha[r]])
             }
         }
     }
-    let gd = if IAD {
-        let c = [0, 1, 2, 3, 4, 5].map(|k| g.load(flow.iad[k]));
-        let cs = [
-            c[0] * s[0] + c[1] * s[1] + c[2] * s[2],
-            c[1] * s[0] + c[3] * s[1] + c[4] * s[2],
-            c[2] * s[0] + c[4] * s[1] + c[5] * s[2],
-        ];
-        k3 * (cs[0] * cs[0] + cs[1] * cs[1] + cs[2] * cs[2]).sqrt()
-    } else {
-        k3 * inv_h * (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt()
-    };
-    let (gd, h, c, dv) = (
-        gd.to_array(),
-        hi.to_array(),
-        ci.to_array(),
-        div_i.to_array(),
-    );
-    let alpha_loc = std::array::from_fn(|l| params.local_alpha(dv[l], gd[l], h[l], c[l]));
-    (alpha_loc, v_sig.to_array())
 }
 
 /// The shock indicator of every target of `nl`: the local target
@@ -482,6 +626,9 @@ fn indicator<K: Kernel, const IAD: bool>(
 /// time. `div_v` must hold the divergence of the targets and of all their
 /// neighbours (halos exchanged). [`update_alpha`] does the same and
 /// advances `alpha` without storing these; this form is for diagnostics.
+///
+/// # Panics
+/// If the arrays differ in length or do not cover the lists.
 pub fn shock_indicator<K: Kernel>(
     kernel: &K,
     bbox: &BoundingBox,
@@ -493,43 +640,16 @@ pub fn shock_indicator<K: Kernel>(
     alpha_loc: &mut [f64],
     v_sig: &mut [f64],
 ) {
-    match gradients {
-        Gradients::Iad => {
-            indicator_loop::<K, true>(kernel, bbox, flow, div_v, params, nl, alpha_loc, v_sig)
-        }
-        Gradients::Kernel => {
-            indicator_loop::<K, false>(kernel, bbox, flow, div_v, params, nl, alpha_loc, v_sig)
-        }
-    }
-}
-
-fn indicator_loop<K: Kernel, const IAD: bool>(
-    kernel: &K,
-    bbox: &BoundingBox,
-    flow: FlowState<'_>,
-    div_v: &[f64],
-    params: &AvSwitchParams,
-    nl: &CompactNeighborList,
-    alpha_loc: &mut [f64],
-    v_sig: &mut [f64],
-) {
-    let sep = Separation::new(bbox);
-    let reach = max_reach(kernel.support(), flow.pos.h);
-    let targets = nl.targets();
-    alpha_loc[targets.clone()]
-        .par_chunks_mut(LANES)
-        .zip(v_sig[targets.clone()].par_chunks_mut(LANES))
-        .enumerate()
-        .for_each_init(GroupUnion::default, |union, (k, (al, vs))| {
-            let g = Group {
-                first: targets.start + k * LANES,
-                valid: al.len(),
-            };
-            let runs = union.build(nl, g.first..g.first + g.valid);
-            let (a, v) = indicator::<K, IAD>(kernel, &sep, &flow, div_v, params, runs, g, reach);
-            al.copy_from_slice(&a[..g.valid]);
-            vs.copy_from_slice(&v[..g.valid]);
-        });
+    let run = IndicatorRun {
+        kernel,
+        bbox,
+        flow,
+        div_v,
+        params: *params,
+        nl,
+        out: IndicatorOut::Indicator(alpha_loc, v_sig),
+    };
+    with_gradients(gradients, run);
 }
 
 /// Advances the viscosity strength of every target of `nl` over the time
@@ -547,7 +667,8 @@ fn indicator_loop<K: Kernel, const IAD: bool>(
 /// `alpha` only; the momentum stage needs the halos' values too.
 ///
 /// # Panics
-/// If `params` is not [valid](AvSwitchParams::is_valid).
+/// If `params` is not [valid](AvSwitchParams::is_valid), or the arrays
+/// differ in length or do not cover the lists.
 pub fn update_alpha<K: Kernel>(
     kernel: &K,
     bbox: &BoundingBox,
@@ -560,41 +681,14 @@ pub fn update_alpha<K: Kernel>(
     alpha: &mut [f64],
 ) {
     assert!(params.is_valid(), "invalid AV switch parameters {params:?}");
-    match gradients {
-        Gradients::Iad => update_loop::<K, true>(kernel, bbox, flow, div_v, params, dt, nl, alpha),
-        Gradients::Kernel => {
-            update_loop::<K, false>(kernel, bbox, flow, div_v, params, dt, nl, alpha)
-        }
-    }
-}
-
-fn update_loop<K: Kernel, const IAD: bool>(
-    kernel: &K,
-    bbox: &BoundingBox,
-    flow: FlowState<'_>,
-    div_v: &[f64],
-    params: &AvSwitchParams,
-    dt: f64,
-    nl: &CompactNeighborList,
-    alpha: &mut [f64],
-) {
-    let sep = Separation::new(bbox);
-    let reach = max_reach(kernel.support(), flow.pos.h);
-    let targets = nl.targets();
-    alpha[targets.clone()]
-        .par_chunks_mut(LANES)
-        .enumerate()
-        .for_each_init(GroupUnion::default, |union, (k, a)| {
-            let g = Group {
-                first: targets.start + k * LANES,
-                valid: a.len(),
-            };
-            let runs = union.build(nl, g.first..g.first + g.valid);
-            let (alpha_loc, v_sig) =
-                indicator::<K, IAD>(kernel, &sep, &flow, div_v, params, runs, g, reach);
-            for (l, a) in a.iter_mut().enumerate() {
-                let tau = params.decay_time(flow.pos.h[g.first + l], v_sig[l]);
-                *a = params.advance(*a, alpha_loc[l], tau, dt);
-            }
-        });
+    let run = IndicatorRun {
+        kernel,
+        bbox,
+        flow,
+        div_v,
+        params: *params,
+        nl,
+        out: IndicatorOut::Advance(alpha, dt),
+    };
+    with_gradients(gradients, run);
 }

@@ -13,9 +13,7 @@
 //! the conductivity is on, after the momentum stage.
 
 use crate::density::Positions;
-use crate::geometry::{max_reach, Separation};
-use crate::lanes::{F64s, GroupUnion, LANES};
-use rayon::prelude::*;
+use crate::pair_loop::{F64s, Group, PairLoop, PairStage};
 use sph_kernels::Kernel;
 use sph_tree::{BoundingBox, CompactNeighborList};
 
@@ -56,6 +54,9 @@ use sph_tree::{BoundingBox, CompactNeighborList};
 /// assert!(du[hot] < 0.0 && du[1 - hot] > 0.0);
 /// assert!((du[0] + du[1]).abs() < 1e-15); // equal masses: energy kept
 /// ```
+///
+/// # Panics
+/// If the arrays differ in length or do not cover the lists.
 #[allow(clippy::too_many_arguments)]
 pub fn conduction<K: Kernel>(
     kernel: &K,
@@ -68,49 +69,70 @@ pub fn conduction<K: Kernel>(
     nl: &CompactNeighborList,
     du: &mut [f64],
 ) {
-    let sep = Separation::new(bbox);
-    let reach = max_reach(kernel.support(), pos.h);
-    let targets = nl.targets();
-    let norm = kernel.norm();
-    let n = pos.x.len();
-    // Targets in groups of LANES over the union of their lists; partners
-    // outside both supports (and the target itself) add exact zeros.
-    du[targets.clone()]
-        .par_chunks_mut(LANES)
-        .enumerate()
-        .for_each_init(GroupUnion::default, |union, (k, du_g)| {
-            let first = targets.start + k * LANES;
-            let valid = du_g.len();
-            let load = |a: &[f64]| F64s::load(a, first, valid);
-            let xi = [load(pos.x), load(pos.y), load(pos.z)];
-            let sep = sep.for_group(xi, reach);
-            let inv_hi = 1.0 / load(pos.h);
-            let ih2 = inv_hi * inv_hi;
-            let ki4 = norm * (ih2 * ih2);
-            let (rho_i, p_i, u_i) = (load(rho), load(p), load(u));
-            let mut sum = F64s::splat(0.0);
-            for run in union.build(nl, first..first + valid) {
-                assert!(run.end <= n, "neighbour {} of {n} particles", run.end - 1);
-                for j in run.clone() {
-                    let d = sep.between_lanes(xi, [pos.x[j], pos.y[j], pos.z[j]]);
-                    let r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-                    let inv_hj = 1.0 / pos.h[j];
-                    let kj4 = norm * inv_hj.powi(4);
-                    let wi = kernel
-                        .shape_and_derivative_lanes(&(r * inv_hi).to_array())
-                        .1;
-                    let wj = kernel
-                        .shape_and_derivative_lanes(&(r * inv_hj).to_array())
-                        .1;
-                    let dw = 0.5 * (ki4 * F64s::from_array(wi) + kj4 * F64s::from_array(wj));
-                    let rho_ij = 0.5 * (rho_i + rho[j]);
-                    let v_u = ((p_i - p[j]).abs() / rho_ij).sqrt();
-                    sum += pos.m[j] * v_u * (u_i - u[j]) / rho_ij * dw;
-                }
-            }
-            let add = (alpha_u * sum).to_array();
-            for (d, a) in du_g.iter_mut().zip(add) {
-                *d += a;
-            }
-        });
+    let driver = PairLoop::new(bbox, kernel.support(), [pos.x, pos.y, pos.z], pos.h, nl)
+        .expect("conduction: positions");
+    let stage = Conduction {
+        kernel,
+        norm: kernel.norm(),
+        alpha_u,
+        h: pos.h,
+        m: pos.m,
+        rho,
+        p,
+        u,
+    };
+    driver.run(&stage, [&mut du[nl.targets()]]);
+}
+
+/// The conduction sums: partners outside both supports (and the target
+/// itself) add exact zeros.
+struct Conduction<'a, K> {
+    kernel: &'a K,
+    norm: f64,
+    alpha_u: f64,
+    h: &'a [f64],
+    m: &'a [f64],
+    rho: &'a [f64],
+    p: &'a [f64],
+    u: &'a [f64],
+}
+
+/// A group's `1/h`, `K/h^4`, `rho`, `P`, `u` and the sum.
+type ConductionSums = (F64s, F64s, F64s, F64s, F64s, F64s);
+
+impl<K: Kernel> PairStage for Conduction<'_, K> {
+    type Sums = ConductionSums;
+    type Out<'o> = [&'o mut [f64]; 1];
+    type Stats = ();
+
+    #[inline(always)]
+    fn start(&self, g: &Group) -> ConductionSums {
+        let inv_hi = 1.0 / g.load(self.h);
+        let ih2 = inv_hi * inv_hi;
+        let ki4 = self.norm * (ih2 * ih2);
+        let (rho_i, p_i, u_i) = (g.load(self.rho), g.load(self.p), g.load(self.u));
+        (inv_hi, ki4, rho_i, p_i, u_i, F64s::splat(0.0))
+    }
+
+    #[inline(always)]
+    fn pair(&self, t: &mut ConductionSums, j: usize, _: [F64s; 3], r2: F64s) {
+        let (inv_hi, ki4, rho_i, p_i, u_i, sum) = t;
+        let r = r2.sqrt();
+        let inv_hj = 1.0 / self.h[j];
+        let kj4 = self.norm * inv_hj.powi(4);
+        let wi = self.kernel.shape_and_derivative_lanes(r * *inv_hi).1;
+        let wj = self.kernel.shape_and_derivative_lanes(r * inv_hj).1;
+        let dw = 0.5 * (*ki4 * wi + kj4 * wj);
+        let rho_ij = 0.5 * (*rho_i + self.rho[j]);
+        let v_u = ((*p_i - self.p[j]).abs() / rho_ij).sqrt();
+        *sum += self.m[j] * v_u * (*u_i - self.u[j]) / rho_ij * dw;
+    }
+
+    #[inline(always)]
+    fn finish(&self, _: &Group, t: ConductionSums, [du]: Self::Out<'_>) {
+        let add = (self.alpha_u * t.5).to_array();
+        for (d, a) in du.iter_mut().zip(add) {
+            *d += a;
+        }
+    }
 }

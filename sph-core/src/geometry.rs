@@ -1,6 +1,6 @@
 //! Pair separations with the minimum image on periodic axes.
 
-use crate::lanes::F64s;
+use sph_kernels::F64s;
 use sph_tree::BoundingBox;
 
 /// Computes `x_i - x_j` for particle pairs, folding periodic axes.
@@ -33,34 +33,6 @@ impl Separation {
             lo: bbox.lo(),
             hi: bbox.hi(),
         }
-    }
-
-    /// `d` folded into `[-L/2, L/2]` on periodic axes (compiles to selects).
-    #[inline(always)]
-    fn fold(&self, k: usize, d: f64) -> f64 {
-        let (h, l) = (self.half[k], self.length[k]);
-        if d > h {
-            d - l
-        } else if d < -h {
-            d + l
-        } else {
-            d
-        }
-    }
-
-    /// `a - b` with the minimum image along periodic axes.
-    #[inline(always)]
-    pub fn between(&self, a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-        std::array::from_fn(|k| self.fold(k, a[k] - b[k]))
-    }
-
-    /// [`between`](Self::between) for a lane of points `a = (x, y, z)[l]`
-    /// and one partner `b`, as `[dx, dy, dz]`; lane `l` equals the scalar
-    /// result bit for bit.
-    #[inline(always)]
-    pub fn between_lanes(&self, a: [F64s; 3], b: [f64; 3]) -> [F64s; 3] {
-        let axis = |k: usize| (a[k] - b[k]).fold(self.half[k], self.length[k]);
-        [axis(0), axis(1), axis(2)]
     }
 
     /// The separations of a group of targets (lanes of `a`, inside the
@@ -109,10 +81,4 @@ impl GroupSeparation {
         };
         [axis(0), axis(1), axis(2)]
     }
-}
-
-/// `support * max h`: the farthest any listed pair can be apart.
-pub fn max_reach(support: f64, h: &[f64]) -> f64 {
-    use rayon::prelude::*;
-    support * h.par_iter().copied().reduce(|| 0.0, f64::max)
 }

@@ -4,9 +4,7 @@
 //! fields.
 
 use crate::density::Positions;
-use crate::geometry::{max_reach, Separation};
-use crate::lanes::{F64s, GroupUnion, LANES};
-use rayon::prelude::*;
+use crate::pair_loop::{F64s, Group, PairLoop, PairStage, Reduce};
 use sph_kernels::Kernel;
 use sph_tree::{BoundingBox, CompactNeighborList};
 
@@ -50,6 +48,9 @@ pub fn invert_symmetric(t: [f64; 6]) -> Result<[f64; 6], f64> {
 /// Fills the six components of `C_i = tau_i^{-1}` for every target, with
 /// volumes `V_j = m_j / rho_j`. Returns the lowest-index singular matrix,
 /// if any (its components are left as zeros).
+///
+/// # Panics
+/// If the arrays differ in length or do not cover the lists.
 pub fn iad<K: Kernel>(
     kernel: &K,
     bbox: &BoundingBox,
@@ -58,77 +59,92 @@ pub fn iad<K: Kernel>(
     nl: &CompactNeighborList,
     c: &mut [Vec<f64>; 6],
 ) -> Result<(), Singular> {
-    let sep = Separation::new(bbox);
-    let reach = max_reach(kernel.support(), pos.h);
-    let targets = nl.targets();
-    let norm = kernel.norm();
+    let driver = PairLoop::new(bbox, kernel.support(), [pos.x, pos.y, pos.z], pos.h, nl)
+        .expect("iad: positions");
     let n = pos.x.len();
-    let (x, y, z, m, rho) = (
-        &pos.x[..n],
-        &pos.y[..n],
-        &pos.z[..n],
-        &pos.m[..n],
-        &rho[..n],
-    );
+    let stage = Tau {
+        kernel,
+        norm: kernel.norm(),
+        h: pos.h,
+        m: &pos.m[..n],
+        rho: &rho[..n],
+    };
+    let r = nl.targets();
     let [c0, c1, c2, c3, c4, c5] = c;
-    let range = targets.clone();
-    // Targets in groups of LANES over the union of their lists: partners
-    // beyond 2 h_i add W = 0, so each lane is the scalar sum over its list.
-    let bad = (
-        c0[range.clone()].par_chunks_mut(LANES),
-        c1[range.clone()].par_chunks_mut(LANES),
-        c2[range.clone()].par_chunks_mut(LANES),
-        c3[range.clone()].par_chunks_mut(LANES),
-        c4[range.clone()].par_chunks_mut(LANES),
-        c5[range].par_chunks_mut(LANES),
-    )
-        .into_par_iter()
-        .enumerate()
-        .map_init(GroupUnion::default, |union, (g, out)| {
-            let first = targets.start + g * LANES;
-            let valid = out.0.len();
-            let load = |a: &[f64]| F64s::load(a, first, valid);
-            let xi = [load(x), load(y), load(z)];
-            let sep = sep.for_group(xi, reach);
-            let inv_h = 1.0 / load(pos.h);
-            let mut t = [F64s::splat(0.0); 6];
-            for run in union.build(nl, first..first + valid) {
-                assert!(run.end <= n, "neighbour {} of {n} particles", run.end - 1);
-                for j in run.clone() {
-                    let d = sep.between_lanes(xi, [x[j], y[j], z[j]]);
-                    let v = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() * inv_h;
-                    let w = m[j] / rho[j] * F64s::from_array(kernel.shape_lanes(&v.to_array()));
-                    t[0] += w * d[0] * d[0];
-                    t[1] += w * d[0] * d[1];
-                    t[2] += w * d[0] * d[2];
-                    t[3] += w * d[1] * d[1];
-                    t[4] += w * d[1] * d[2];
-                    t[5] += w * d[2] * d[2];
-                }
+    let out = [c0, c1, c2, c3, c4, c5].map(|c| &mut c[r.clone()]);
+    match driver.run(&stage, out) {
+        FirstSingular(Some(s)) => Err(s),
+        FirstSingular(None) => Ok(()),
+    }
+}
+
+/// The lowest-index singular matrix of some targets.
+struct FirstSingular(Option<Singular>);
+
+impl Reduce for FirstSingular {
+    fn identity() -> Self {
+        Self(None)
+    }
+
+    fn merge(self, o: Self) -> Self {
+        match (self.0, o.0) {
+            (Some(a), Some(b)) => Self(Some(if a.index <= b.index { a } else { b })),
+            (a, b) => Self(a.or(b)),
+        }
+    }
+}
+
+/// The sums of `tau`: partners beyond 2 h_i add W = 0, so each lane is the
+/// scalar sum over its list.
+struct Tau<'a, K> {
+    kernel: &'a K,
+    norm: f64,
+    h: &'a [f64],
+    m: &'a [f64],
+    rho: &'a [f64],
+}
+
+impl<K: Kernel> PairStage for Tau<'_, K> {
+    /// `1/h` and the six components of `tau`.
+    type Sums = (F64s, [F64s; 6]);
+    type Out<'o> = [&'o mut [f64]; 6];
+    type Stats = FirstSingular;
+
+    #[inline(always)]
+    fn start(&self, g: &Group) -> Self::Sums {
+        (1.0 / g.load(self.h), [F64s::splat(0.0); 6])
+    }
+
+    #[inline(always)]
+    fn pair(&self, (inv_h, t): &mut Self::Sums, j: usize, d: [F64s; 3], r2: F64s) {
+        let v = r2.sqrt() * *inv_h;
+        let w = self.m[j] / self.rho[j] * self.kernel.shape_lanes(v);
+        t[0] += w * d[0] * d[0];
+        t[1] += w * d[0] * d[1];
+        t[2] += w * d[0] * d[2];
+        t[3] += w * d[1] * d[1];
+        t[4] += w * d[1] * d[2];
+        t[5] += w * d[2] * d[2];
+    }
+
+    #[inline(always)]
+    fn finish(&self, g: &Group, (inv_h, t): Self::Sums, mut out: Self::Out<'_>) -> FirstSingular {
+        let k3 = self.norm * inv_h * inv_h * inv_h;
+        let t = t.map(|v| (v * k3).to_array());
+        let mut first_bad = None;
+        for l in 0..g.valid {
+            let tl = [t[0][l], t[1][l], t[2][l], t[3][l], t[4][l], t[5][l]];
+            let inv = invert_symmetric(tl).unwrap_or_else(|det| {
+                first_bad = first_bad.or(Some(Singular {
+                    index: g.first + l,
+                    det,
+                }));
+                [0.0; 6]
+            });
+            for (o, v) in out.iter_mut().zip(inv) {
+                o[l] = v;
             }
-            let k3 = norm * inv_h * inv_h * inv_h;
-            let t = t.map(|v| (v * k3).to_array());
-            let mut out = [out.0, out.1, out.2, out.3, out.4, out.5];
-            let mut first_bad = None;
-            for l in 0..valid {
-                let tl = [t[0][l], t[1][l], t[2][l], t[3][l], t[4][l], t[5][l]];
-                let inv = invert_symmetric(tl).unwrap_or_else(|det| {
-                    first_bad = first_bad.or(Some(Singular {
-                        index: first + l,
-                        det,
-                    }));
-                    [0.0; 6]
-                });
-                for (o, v) in out.iter_mut().zip(inv) {
-                    o[l] = v;
-                }
-            }
-            first_bad
-        })
-        .flatten()
-        .min_by_key(|s| s.index);
-    match bad {
-        Some(s) => Err(s),
-        None => Ok(()),
+        }
+        FirstSingular(first_bad)
     }
 }

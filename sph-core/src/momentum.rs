@@ -23,21 +23,14 @@
 //! balances the kinetic energy change exactly, and viscosity only heats.
 
 use crate::density::Positions;
-use crate::geometry::{max_reach, Separation};
-use crate::lanes::{neighbour_lanes, F64s, GroupUnion, LANES};
+pub use crate::pair_loop::Gradients;
+use crate::pair_loop::{
+    neighbour_lanes, sym_mat_vec, with_gradients, F64s, Group, PairLoop, PairStage, Reduce,
+    WithGradients,
+};
 use rayon::prelude::*;
 use sph_kernels::Kernel;
 use sph_tree::{BoundingBox, CompactNeighborList};
-
-/// How gradients are computed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Gradients {
-    /// Integral approach to derivatives (exact for linear fields).
-    #[default]
-    Iad,
-    /// Plain kernel gradients `grad W`.
-    Kernel,
-}
 
 /// The per-particle state the momentum and energy equations read.
 #[derive(Debug, Clone, Copy)]
@@ -125,6 +118,9 @@ impl PairFactors {
 /// Computes accelerations and du/dt of every target of `nl` with a
 /// constant viscosity strength `alpha`; `f` must have been filled from the
 /// same state.
+///
+/// # Panics
+/// If the state's arrays differ in length or do not cover the lists.
 pub fn momentum_energy<K: Kernel>(
     kernel: &K,
     bbox: &BoundingBox,
@@ -135,10 +131,16 @@ pub fn momentum_energy<K: Kernel>(
     nl: &CompactNeighborList,
     out: Rates<'_>,
 ) -> MomentumStats {
-    match gradients {
-        Gradients::Iad => pair_loop::<K, true, false>(kernel, bbox, s, f, alpha, &[], nl, out),
-        Gradients::Kernel => pair_loop::<K, false, false>(kernel, bbox, s, f, alpha, &[], nl, out),
-    }
+    let run = MomentumRun {
+        kernel,
+        bbox,
+        s,
+        f,
+        alpha: Alpha::Constant(alpha),
+        nl,
+        out,
+    };
+    with_gradients(gradients, run)
 }
 
 /// As [`momentum_energy`], with a viscosity strength per particle: pair
@@ -165,207 +167,302 @@ pub fn momentum_energy_switched<K: Kernel>(
         alpha.len(),
         s.rho.len()
     );
-    match gradients {
-        Gradients::Iad => pair_loop::<K, true, true>(kernel, bbox, s, f, 0.0, alpha, nl, out),
-        Gradients::Kernel => pair_loop::<K, false, true>(kernel, bbox, s, f, 0.0, alpha, nl, out),
+    let run = MomentumRun {
+        kernel,
+        bbox,
+        s,
+        f,
+        alpha: Alpha::PerParticle(alpha),
+        nl,
+        out,
+    };
+    with_gradients(gradients, run)
+}
+
+/// The viscosity strength of the pairs.
+#[derive(Debug, Clone, Copy)]
+enum Alpha<'a> {
+    Constant(f64),
+    PerParticle(&'a [f64]),
+}
+
+/// The arguments of one momentum pass, run for one gradient operator.
+struct MomentumRun<'a, K> {
+    kernel: &'a K,
+    bbox: &'a BoundingBox,
+    s: HydroState<'a>,
+    f: &'a PairFactors,
+    alpha: Alpha<'a>,
+    nl: &'a CompactNeighborList,
+    out: Rates<'a>,
+}
+
+impl<K: Kernel> WithGradients for MomentumRun<'_, K> {
+    type Output = MomentumStats;
+
+    fn run<const IAD: bool>(self) -> MomentumStats {
+        let (s, f) = (self.s, self.f);
+        let pos = s.pos;
+        let driver = PairLoop::new(
+            self.bbox,
+            self.kernel.support(),
+            [pos.x, pos.y, pos.z],
+            pos.h,
+            self.nl,
+        )
+        .expect("momentum: positions");
+        // Every per-particle slice cut to the same length.
+        let n = s.rho.len();
+        let cut = |a| cut(a, n);
+        let r = self.nl.targets();
+        let o = self.out;
+        let out = [
+            &mut o.ax[r.clone()],
+            &mut o.ay[r.clone()],
+            &mut o.az[r.clone()],
+            &mut o.du[r],
+        ];
+        let stage = |alpha, alpha_per| Momentum::<K, IAD, false> {
+            kernel: self.kernel,
+            norm: self.kernel.norm(),
+            support: self.kernel.support(),
+            h: cut(pos.h),
+            m: cut(pos.m),
+            v: [cut(s.vx), cut(s.vy), cut(s.vz)],
+            c: cut(s.c),
+            inv_h: cut(&f.inv_h),
+            inv_rho: cut(&f.inv_rho),
+            pre: cut(&f.pre),
+            iad: if IAD { s.iad.map(cut) } else { [&[]; 6] },
+            alpha,
+            alpha_per,
+        };
+        match self.alpha {
+            Alpha::Constant(a) => driver.run(&stage(a, &[]), out),
+            Alpha::PerParticle(a) => driver.run(&stage(0.0, cut(a)).switched(), out),
+        }
     }
 }
 
-/// `a[..n]`: slices of one length let the compiler drop bounds checks.
-#[inline(always)]
+/// `a[..n]`: the per-particle slices of a stage share one length.
+#[inline]
 fn cut(a: &[f64], n: usize) -> &[f64] {
     &a[..n]
 }
 
-/// The pair loop; `SWITCHED` selects `alpha_ij = (alpha_per[i] +
-/// alpha_per[j]) / 2` over the constant `alpha` at compile time. Targets
-/// go in groups of [`LANES`], one per lane ([`lanes`](crate::lanes)).
-fn pair_loop<K: Kernel, const IAD: bool, const SWITCHED: bool>(
-    kernel: &K,
-    bbox: &BoundingBox,
-    s: HydroState<'_>,
-    f: &PairFactors,
+/// The momentum and energy sums; `SWITCHED` selects `alpha_ij =
+/// (alpha_per[i] + alpha_per[j]) / 2` over the constant `alpha` at compile
+/// time, `IAD` the gradient operator.
+struct Momentum<'a, K, const IAD: bool, const SWITCHED: bool> {
+    kernel: &'a K,
+    norm: f64,
+    support: f64,
+    h: &'a [f64],
+    m: &'a [f64],
+    v: [&'a [f64]; 3],
+    c: &'a [f64],
+    inv_h: &'a [f64],
+    inv_rho: &'a [f64],
+    pre: &'a [f64],
+    iad: [&'a [f64]; 6],
     alpha: f64,
-    alpha_per: &[f64],
-    nl: &CompactNeighborList,
-    out: Rates<'_>,
-) -> MomentumStats {
-    let sep = Separation::new(bbox);
-    let reach = max_reach(kernel.support(), s.pos.h);
-    let targets = nl.targets();
-    let norm = kernel.norm();
-    let support = kernel.support();
-    let pos = s.pos;
-    // Every per-particle slice cut to the same length, so that one check
-    // per run of neighbours covers all loads of the run (the compiler drops
-    // the per-load bounds checks).
-    let n = s.rho.len();
-    let (x, y, z, h, m) = (
-        cut(pos.x, n),
-        cut(pos.y, n),
-        cut(pos.z, n),
-        cut(pos.h, n),
-        cut(pos.m, n),
-    );
-    let (vx, vy, vz, cs) = (cut(s.vx, n), cut(s.vy, n), cut(s.vz, n), cut(s.c, n));
-    let (inv_h, inv_rho, pre) = (cut(&f.inv_h, n), cut(&f.inv_rho, n), cut(&f.pre, n));
-    let iad: [&[f64]; 6] = if IAD {
-        s.iad.map(|a| cut(a, n))
-    } else {
-        [&[]; 6]
-    };
-    let alpha_per = if SWITCHED {
-        cut(alpha_per, n)
-    } else {
-        alpha_per
-    };
-    let r = targets.clone();
-    (
-        out.ax[r.clone()].par_chunks_mut(LANES),
-        out.ay[r.clone()].par_chunks_mut(LANES),
-        out.az[r.clone()].par_chunks_mut(LANES),
-        out.du[r].par_chunks_mut(LANES),
-    )
-        .into_par_iter()
-        .enumerate()
-        .map_init(GroupUnion::default, |union, (g, (ax, ay, az, du))| {
-            let first = targets.start + g * LANES;
-            let valid = ax.len();
-            let load = |a: &[f64]| F64s::load(a, first, valid);
-            let xi = [load(pos.x), load(pos.y), load(pos.z)];
-            let sep = sep.for_group(xi, reach);
-            let vi = [load(s.vx), load(s.vy), load(s.vz)];
-            let reach_i = {
-                let r = support * load(pos.h);
-                r * r
-            };
-            let inv_hi = load(&f.inv_h);
-            let ki3 = norm * inv_hi * inv_hi * inv_hi;
-            let ci = load(s.c);
-            let (pre_i, inv_rho_i) = (load(&f.pre), load(&f.inv_rho));
-            let alpha_i = if SWITCHED {
-                load(alpha_per)
+    alpha_per: &'a [f64],
+}
+
+impl<'a, K, const IAD: bool> Momentum<'a, K, IAD, false> {
+    fn switched(self) -> Momentum<'a, K, IAD, true> {
+        let Momentum {
+            kernel,
+            norm,
+            support,
+            h,
+            m,
+            v,
+            c,
+            inv_h,
+            inv_rho,
+            pre,
+            iad,
+            alpha,
+            alpha_per,
+        } = self;
+        Momentum {
+            kernel,
+            norm,
+            support,
+            h,
+            m,
+            v,
+            c,
+            inv_h,
+            inv_rho,
+            pre,
+            iad,
+            alpha,
+            alpha_per,
+        }
+    }
+}
+
+/// One group's target values and sums in the momentum loop.
+struct MomentumSums {
+    vi: [F64s; 3],
+    reach_i: F64s,
+    inv_hi: F64s,
+    ki3: F64s,
+    ci: F64s,
+    pre_i: F64s,
+    inv_rho_i: F64s,
+    alpha_i: F64s,
+    ci_m: [F64s; 6],
+    acc_a: [F64s; 3],
+    /// `sum_j m_j v_ij . A_ij(h_i)`
+    acc_ep: F64s,
+    acc_eav: F64s,
+    acc_div: F64s,
+    acc_vsig: F64s,
+}
+
+impl<K: Kernel, const IAD: bool, const SWITCHED: bool> PairStage
+    for Momentum<'_, K, IAD, SWITCHED>
+{
+    type Sums = MomentumSums;
+    type Out<'o> = [&'o mut [f64]; 4];
+    type Stats = MomentumStats;
+
+    #[inline(always)]
+    fn start(&self, g: &Group) -> MomentumSums {
+        let zero = F64s::splat(0.0);
+        let reach_i = {
+            let r = self.support * g.load(self.h);
+            r * r
+        };
+        let inv_hi = g.load(self.inv_h);
+        let ci = g.load(self.c);
+        MomentumSums {
+            vi: self.v.map(|v| g.load(v)),
+            reach_i,
+            inv_hi,
+            ki3: self.norm * inv_hi * inv_hi * inv_hi,
+            ci,
+            pre_i: g.load(self.pre),
+            inv_rho_i: g.load(self.inv_rho),
+            alpha_i: if SWITCHED {
+                g.load(self.alpha_per)
             } else {
-                F64s::splat(alpha)
-            };
-            let zero = F64s::splat(0.0);
-            let ci_m = if IAD {
-                [0, 1, 2, 3, 4, 5].map(|c| load(s.iad[c]))
+                F64s::splat(self.alpha)
+            },
+            ci_m: if IAD {
+                self.iad.map(|c| g.load(c))
             } else {
                 [zero; 6]
-            };
-            let mut acc_a = [zero; 3];
-            let mut acc_ep = zero; // sum_j m_j v_ij . A_ij(h_i)
-            let mut acc_eav = zero;
-            let mut acc_div = zero;
-            let mut acc_vsig = ci;
-            for run in union.build(nl, first..first + valid) {
-                assert!(run.end <= n, "neighbour {} of {n} particles", run.end - 1);
-                for j in run.clone() {
-                    let xj = [x[j], y[j], z[j]];
-                    let d = sep.between_lanes(xi, xj); // x_i - x_j
-                    let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-                    let reach_j = {
-                        let r = support * h[j];
-                        r * r
-                    };
-                    // Lanes whose target has j as neighbour get weight 1,
-                    // the others compute with r = 1 (finite) and weight 0.
-                    let (r2, weight) = neighbour_lanes(r2, reach_i, reach_j);
-                    let mj = m[j] * weight;
-                    let inv_r = 1.0 / r2.sqrt();
-                    let rr = r2 * inv_r;
-                    let inv_hj = inv_h[j];
-                    // A_ij(h_i), A_ij(h_j).
-                    let (ai, aj) = if IAD {
-                        // A = C (x_j - x_i) W = -(C d) W
-                        let wi =
-                            ki3 * F64s::from_array(kernel.shape_lanes(&(rr * inv_hi).to_array()));
-                        let kj3 = norm * inv_hj * inv_hj * inv_hj;
-                        let wj =
-                            kj3 * F64s::from_array(kernel.shape_lanes(&(rr * inv_hj).to_array()));
-                        let cj = [
-                            F64s::splat(iad[0][j]),
-                            F64s::splat(iad[1][j]),
-                            F64s::splat(iad[2][j]),
-                            F64s::splat(iad[3][j]),
-                            F64s::splat(iad[4][j]),
-                            F64s::splat(iad[5][j]),
-                        ];
-                        let cd = mat_vec_lanes(&ci_m, d);
-                        let cdj = mat_vec_lanes(&cj, d);
-                        (scale3(cd, -wi), scale3(cdj, -wj))
-                    } else {
-                        // grad_i W(r, h) = K/h^4 w'(r/h) d / r
-                        let (_, dwi) = kernel.shape_and_derivative_lanes(&(rr * inv_hi).to_array());
-                        let (_, dwj) = kernel.shape_and_derivative_lanes(&(rr * inv_hj).to_array());
-                        let gi = ki3 * inv_hi * F64s::from_array(dwi) * inv_r;
-                        let kj4 = norm * inv_hj * inv_hj * inv_hj * inv_hj;
-                        let gj = kj4 * F64s::from_array(dwj) * inv_r;
-                        (scale3(d, gi), scale3(d, gj))
-                    };
-                    let vij = [vi[0] - vx[j], vi[1] - vy[j], vi[2] - vz[j]];
-                    let w = (vij[0] * d[0] + vij[1] * d[1] + vij[2] * d[2]) * inv_r;
-                    let vsig = ci + cs[j] - 3.0 * w.min(zero);
-                    acc_vsig = acc_vsig.max(vsig * weight);
-                    let alpha_ij = if SWITCHED {
-                        0.5 * (alpha_i + alpha_per[j])
-                    } else {
-                        F64s::splat(alpha)
-                    };
-                    let visc = w.where_negative(-0.5 * alpha_ij * vsig * w);
-                    let vi_r = 0.5 * visc * inv_rho_i;
-                    let inv_rho_j = inv_rho[j];
-                    let vj_r = 0.5 * visc * inv_rho_j;
-                    let (ci_f, cj_f) = (pre_i + vi_r, pre[j] + vj_r);
-                    for c in 0..3 {
-                        acc_a[c] -= mj * (ci_f * ai[c] + cj_f * aj[c]);
-                    }
-                    let vai = vij[0] * ai[0] + vij[1] * ai[1] + vij[2] * ai[2];
-                    let vaj = vij[0] * aj[0] + vij[1] * aj[1] + vij[2] * aj[2];
-                    acc_ep += mj * vai;
-                    acc_eav += mj * (vi_r * vai + vj_r * vaj);
-                    acc_div -= mj * inv_rho_j * vai;
-                }
-            }
-            acc_a[0].store(ax);
-            acc_a[1].store(ay);
-            acc_a[2].store(az);
-            (pre_i * acc_ep + 0.5 * acc_eav).store(du);
-            let h_over_vsig = (1.0 / (inv_hi * acc_vsig)).to_array();
-            let div = acc_div.to_array();
-            let mut st = MomentumStats {
-                min_h_over_vsig: f64::INFINITY,
-                max_abs_div_v: 0.0,
-            };
-            for l in 0..valid {
-                st.min_h_over_vsig = st.min_h_over_vsig.min(h_over_vsig[l]);
-                st.max_abs_div_v = st.max_abs_div_v.max(div[l].abs());
-            }
-            st
-        })
-        .reduce(
-            || MomentumStats {
-                min_h_over_vsig: f64::INFINITY,
-                max_abs_div_v: 0.0,
             },
-            |a, b| MomentumStats {
-                min_h_over_vsig: a.min_h_over_vsig.min(b.min_h_over_vsig),
-                max_abs_div_v: a.max_abs_div_v.max(b.max_abs_div_v),
-            },
-        )
+            acc_a: [zero; 3],
+            acc_ep: zero,
+            acc_eav: zero,
+            acc_div: zero,
+            acc_vsig: ci,
+        }
+    }
+
+    #[inline(always)]
+    fn pair(&self, t: &mut MomentumSums, j: usize, d: [F64s; 3], r2: F64s) {
+        let zero = F64s::splat(0.0);
+        let norm = self.norm;
+        let reach_j = {
+            let r = self.support * self.h[j];
+            r * r
+        };
+        // Lanes whose target has j as neighbour get weight 1, the others
+        // compute with r = 1 (finite) and weight 0.
+        let (r2, weight) = neighbour_lanes(r2, t.reach_i, reach_j);
+        let mj = self.m[j] * weight;
+        let inv_r = 1.0 / r2.sqrt();
+        let rr = r2 * inv_r;
+        let inv_hj = self.inv_h[j];
+        let inv_hi = t.inv_hi;
+        // A_ij(h_i), A_ij(h_j).
+        let (ai, aj) = if IAD {
+            // A = C (x_j - x_i) W = -(C d) W
+            let wi = t.ki3 * self.kernel.shape_lanes(rr * inv_hi);
+            let kj3 = norm * inv_hj * inv_hj * inv_hj;
+            let wj = kj3 * self.kernel.shape_lanes(rr * inv_hj);
+            let cj = [0, 1, 2, 3, 4, 5].map(|k| F64s::splat(self.iad[k][j]));
+            let cd = sym_mat_vec(&t.ci_m, d);
+            let cdj = sym_mat_vec(&cj, d);
+            (scale3(cd, -wi), scale3(cdj, -wj))
+        } else {
+            // grad_i W(r, h) = K/h^4 w'(r/h) d / r
+            let (_, dwi) = self.kernel.shape_and_derivative_lanes(rr * inv_hi);
+            let (_, dwj) = self.kernel.shape_and_derivative_lanes(rr * inv_hj);
+            let gi = t.ki3 * inv_hi * dwi * inv_r;
+            let kj4 = norm * inv_hj * inv_hj * inv_hj * inv_hj;
+            let gj = kj4 * dwj * inv_r;
+            (scale3(d, gi), scale3(d, gj))
+        };
+        let vi = t.vi;
+        let vij = [
+            vi[0] - self.v[0][j],
+            vi[1] - self.v[1][j],
+            vi[2] - self.v[2][j],
+        ];
+        let w = (vij[0] * d[0] + vij[1] * d[1] + vij[2] * d[2]) * inv_r;
+        let vsig = t.ci + self.c[j] - 3.0 * w.min(zero);
+        t.acc_vsig = t.acc_vsig.max(vsig * weight);
+        let alpha_ij = if SWITCHED {
+            0.5 * (t.alpha_i + self.alpha_per[j])
+        } else {
+            F64s::splat(self.alpha)
+        };
+        let visc = w.where_negative(-0.5 * alpha_ij * vsig * w);
+        let vi_r = 0.5 * visc * t.inv_rho_i;
+        let inv_rho_j = self.inv_rho[j];
+        let vj_r = 0.5 * visc * inv_rho_j;
+        let (ci_f, cj_f) = (t.pre_i + vi_r, self.pre[j] + vj_r);
+        for c in 0..3 {
+            t.acc_a[c] -= mj * (ci_f * ai[c] + cj_f * aj[c]);
+        }
+        let vai = vij[0] * ai[0] + vij[1] * ai[1] + vij[2] * ai[2];
+        let vaj = vij[0] * aj[0] + vij[1] * aj[1] + vij[2] * aj[2];
+        t.acc_ep += mj * vai;
+        t.acc_eav += mj * (vi_r * vai + vj_r * vaj);
+        t.acc_div -= mj * inv_rho_j * vai;
+    }
+
+    #[inline(always)]
+    fn finish(&self, g: &Group, t: MomentumSums, [ax, ay, az, du]: Self::Out<'_>) -> MomentumStats {
+        t.acc_a[0].store(ax);
+        t.acc_a[1].store(ay);
+        t.acc_a[2].store(az);
+        (t.pre_i * t.acc_ep + 0.5 * t.acc_eav).store(du);
+        let h_over_vsig = (1.0 / (t.inv_hi * t.acc_vsig)).to_array();
+        let div = t.acc_div.to_array();
+        let mut st = MomentumStats::identity();
+        for l in 0..g.valid {
+            st.min_h_over_vsig = st.min_h_over_vsig.min(h_over_vsig[l]);
+            st.max_abs_div_v = st.max_abs_div_v.max(div[l].abs());
+        }
+        st
+    }
+}
+
+impl Reduce for MomentumStats {
+    fn identity() -> Self {
+        MomentumStats {
+            min_h_over_vsig: f64::INFINITY,
+            max_abs_div_v: 0.0,
+        }
+    }
+
+    fn merge(self, b: Self) -> Self {
+        MomentumStats {
+            min_h_over_vsig: self.min_h_over_vsig.min(b.min_h_over_vsig),
+            max_abs_div_v: self.max_abs_div_v.max(b.max_abs_div_v),
+        }
+    }
 }
 
 #[inline(always)]
 fn scale3(v: [F64s; 3], f: F64s) -> [F64s; 3] {
     [v[0] * f, v[1] * f, v[2] * f]
-}
-
-#[inline(always)]
-fn mat_vec_lanes(c: &[F64s; 6], d: [F64s; 3]) -> [F64s; 3] {
-    [
-        c[0] * d[0] + c[1] * d[1] + c[2] * d[2],
-        c[1] * d[0] + c[3] * d[1] + c[4] * d[2],
-        c[2] * d[0] + c[4] * d[1] + c[5] * d[2],
-    ]
 }

@@ -4,6 +4,7 @@ use std::f64::consts::PI;
 use std::sync::Arc;
 
 use crate::gauss::GaussLegendre;
+use crate::F64s;
 
 /// How many arguments the lane methods ([`Kernel::shape_lanes`],
 /// [`Kernel::shape_and_derivative_lanes`]) take at once: neighbour loops
@@ -35,24 +36,25 @@ pub trait Kernel: Send + Sync {
         (self.shape(v), self.shape_derivative(v))
     }
 
-    /// `w(v)` for [`LANES`] arguments. The default calls
-    /// [`shape`](Kernel::shape) per lane; tables override it with a form
-    /// the compiler vectorises. Lane `l` equals `shape(v[l])` bit for bit.
+    /// `w(v)` for a lane of [`LANES`] arguments. The default calls
+    /// [`shape`](Kernel::shape) per lane; tables override it with vector
+    /// instructions. Lane `l` equals `shape(v[l])` bit for bit.
     #[inline]
-    fn shape_lanes(&self, v: &[f64; LANES]) -> [f64; LANES] {
-        v.map(|x| self.shape(x))
+    fn shape_lanes(&self, v: F64s) -> F64s {
+        F64s::from_array(v.to_array().map(|x| self.shape(x)))
     }
 
-    /// `(w(v), w'(v))` for [`LANES`] arguments; lane `l` equals
+    /// `(w(v), w'(v))` for a lane of [`LANES`] arguments; lane `l` equals
     /// `shape_and_derivative(v[l])` bit for bit.
     #[inline]
-    fn shape_and_derivative_lanes(&self, v: &[f64; LANES]) -> ([f64; LANES], [f64; LANES]) {
+    fn shape_and_derivative_lanes(&self, v: F64s) -> (F64s, F64s) {
+        let v = v.to_array();
         let mut w = [0.0; LANES];
         let mut dw = [0.0; LANES];
         for l in 0..LANES {
             (w[l], dw[l]) = self.shape_and_derivative(v[l]);
         }
-        (w, dw)
+        (F64s::from_array(w), F64s::from_array(dw))
     }
 
     /// Support radius in units of `h` (2.0 for every built-in kernel).
@@ -111,14 +113,11 @@ macro_rules! forward_kernel {
                 (**self).shape_and_derivative(v)
             }
             #[inline]
-            fn shape_lanes(&self, v: &[f64; LANES]) -> [f64; LANES] {
+            fn shape_lanes(&self, v: F64s) -> F64s {
                 (**self).shape_lanes(v)
             }
             #[inline]
-            fn shape_and_derivative_lanes(
-                &self,
-                v: &[f64; LANES],
-            ) -> ([f64; LANES], [f64; LANES]) {
+            fn shape_and_derivative_lanes(&self, v: F64s) -> (F64s, F64s) {
                 (**self).shape_and_derivative_lanes(v)
             }
             #[inline]

@@ -2,8 +2,8 @@
 
 use std::fmt;
 
-use crate::kernel::{Kernel, LANES};
-use crate::KernelError;
+use crate::kernel::Kernel;
+use crate::{F64s, KernelError};
 use wide::f64x8;
 
 /// Any [`Kernel`] sampled on `points` equally spaced nodes over `[0, support]`
@@ -130,9 +130,9 @@ impl Tabulated {
     /// `f64` in `[0, last_interval]`), positions within the intervals, and
     /// the mask of arguments inside the support.
     #[inline(always)]
-    fn locate_lanes(&self, v: &[f64; LANES]) -> (f64x8, f64x8, f64x8) {
+    fn locate_lanes(&self, v: F64s) -> (f64x8, f64x8, f64x8) {
         let zero = f64x8::splat(0.0);
-        let v = f64x8::new(*v);
+        let v = v.0;
         let t = v * f64x8::splat(self.inv_spacing);
         let last = f64x8::splat(f64::from(self.last_interval));
         let c = t.simd_gt(zero).select(t, zero);
@@ -168,8 +168,8 @@ impl Tabulated {
         }
         #[cfg(not(all(target_arch = "x86_64", target_feature = "avx512f")))]
         {
-            let mut a = [0.0; LANES];
-            let mut b = [0.0; LANES];
+            let mut a = [0.0; crate::LANES];
+            let mut b = [0.0; crate::LANES];
             for (l, &k) in node.as_array().iter().enumerate() {
                 let k = k as usize;
                 (a[l], b[l]) = (self.table[k][col], self.table[k + 1][col]);
@@ -210,23 +210,21 @@ impl Kernel for Tabulated {
     // vector instructions (the loads too, as gathers, on AVX-512); each
     // lane is the scalar result bit for bit.
     #[inline(always)]
-    fn shape_lanes(&self, v: &[f64; LANES]) -> [f64; LANES] {
+    fn shape_lanes(&self, v: F64s) -> F64s {
         let (node, frac, inside) = self.locate_lanes(v);
         let (w0, w1) = self.nodes(node, 0);
-        inside
-            .select(w0 + frac * (w1 - w0), f64x8::splat(0.0))
-            .to_array()
+        F64s(inside.select(w0 + frac * (w1 - w0), f64x8::splat(0.0)))
     }
 
     #[inline(always)]
-    fn shape_and_derivative_lanes(&self, v: &[f64; LANES]) -> ([f64; LANES], [f64; LANES]) {
+    fn shape_and_derivative_lanes(&self, v: F64s) -> (F64s, F64s) {
         let (node, frac, inside) = self.locate_lanes(v);
         let zero = f64x8::splat(0.0);
         let (w0, w1) = self.nodes(node, 0);
         let (d0, d1) = self.nodes(node, 1);
         (
-            inside.select(w0 + frac * (w1 - w0), zero).to_array(),
-            inside.select(d0 + frac * (d1 - d0), zero).to_array(),
+            F64s(inside.select(w0 + frac * (w1 - w0), zero)),
+            F64s(inside.select(d0 + frac * (d1 - d0), zero)),
         )
     }
 
