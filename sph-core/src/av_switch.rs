@@ -107,7 +107,7 @@ use sph_kernels::Kernel;
 use sph_tree::{BoundingBox, CompactNeighborList};
 
 /// Parameters of the viscosity switch (defaults: SPH-EXA's).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct AvSwitchParams {
     /// Lowest viscosity strength (0.05), the value `alpha` decays to away
     /// from shocks.
@@ -125,16 +125,19 @@ pub struct AvSwitchParams {
 
 impl Default for AvSwitchParams {
     fn default() -> Self {
-        Self {
-            alpha_min: 0.05,
-            alpha_max: 1.0,
-            decay: 0.2,
-            sound_weight: 0.05,
-        }
+        Self::DEFAULT
     }
 }
 
 impl AvSwitchParams {
+    /// SPH-EXA's parameters.
+    pub const DEFAULT: AvSwitchParams = AvSwitchParams {
+        alpha_min: 0.05,
+        alpha_max: 1.0,
+        decay: 0.2,
+        sound_weight: 0.05,
+    };
+
     /// Whether `0 <= alpha_min <= alpha_max`, `decay > 0` and
     /// `sound_weight >= 0` (all finite).
     pub fn is_valid(&self) -> bool {

@@ -13,8 +13,9 @@ use crate::momentum::{
     Rates,
 };
 use crate::neighbors::{find_neighbors, NeighborParams};
+use crate::scheme::{Scheme, Viscosity};
 use crate::timestep::TimestepParams;
-use crate::{CoreError, Particles};
+use crate::{CoreError, FieldSet, Particles};
 use rayon::prelude::*;
 use sph_comm::{Communicator, ReduceOp, SerialComm};
 use sph_domain::{Domain, DomainConfig, SyncStats};
@@ -55,15 +56,15 @@ macro_rules! hydro_state {
     };
 }
 
-/// Everything that defines the hydrodynamics scheme.
+/// Everything a run of the hydrodynamics needs besides the particles and
+/// the kernel: the scheme (discretisation), the physics (EOS, gravity)
+/// and the numerical controls.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HydroConfig {
+    /// The discretisation: gradients, grad-h, viscosity, conductivity.
+    pub scheme: Scheme,
     /// Equation of state.
     pub eos: Eos,
-    /// IAD or plain kernel gradients.
-    pub gradients: Gradients,
-    /// Artificial viscosity strength.
-    pub alpha: f64,
     /// Neighbour-count targets.
     pub neighbors: NeighborParams,
     /// Smoothing-length update rule.
@@ -74,60 +75,192 @@ pub struct HydroConfig {
     pub curve: Curve,
     /// Octree bucket size.
     pub bucket: usize,
-    /// Whether the grad-h factor Omega enters the equations (its field is
-    /// only allocated then).
-    pub grad_h: bool,
     /// Self-gravity (tree multipoles; open boxes only), or none.
     pub gravity: Option<GravityParams>,
-    /// Time-dependent viscosity switches (per-particle alpha_i, SPH-EXA's
-    /// "ve" style), or none: a constant `alpha`.
-    pub av_switch: Option<AvSwitchParams>,
-    /// Artificial conductivity strength `alpha_u` of internal energy
-    /// (Price 2008; 0 = off, the paper's scheme).
-    pub conductivity: f64,
 }
 
 impl Default for HydroConfig {
     fn default() -> Self {
         Self {
+            scheme: Scheme::PAPER,
             eos: Eos::IdealGas { gamma: 5.0 / 3.0 },
-            gradients: Gradients::Iad,
-            alpha: 1.0,
             neighbors: NeighborParams::default(),
             h_update: HUpdate::default(),
             timestep: TimestepParams::default(),
             curve: Curve::Hilbert,
             bucket: 16,
-            grad_h: true,
             gravity: None,
-            av_switch: None,
-            conductivity: 0.0,
         }
     }
 }
 
-/// Names of the timed stages, in pipeline order.
-pub const STAGES: [&str; 10] = [
+impl HydroConfig {
+    /// Checks the scheme, the EOS and the numerical controls.
+    ///
+    /// # Errors
+    /// [`CoreError::Invalid`] naming the bad value and what is allowed.
+    pub fn validate(&self) -> Result<(), CoreError> {
+        self.scheme.validate()?;
+        self.eos.validate()?;
+        if self.bucket == 0 {
+            return Err(CoreError::Invalid("bucket size must be at least 1".into()));
+        }
+        Ok(())
+    }
+
+    /// The optional per-particle fields a run with this configuration
+    /// needs.
+    pub fn fields(&self) -> FieldSet {
+        self.scheme.fields(self.gravity.is_some())
+    }
+}
+
+/// The timed stages of a step, in pipeline order; one row each in the
+/// timings (`STAGES` holds their names).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// Domain sync: box, decomposition, migration, halo discovery.
+    Sync,
+    /// Octree of the local particles.
+    Tree,
+    /// Neighbour search with the h iteration.
+    Neighbors,
+    /// Density and grad-h factor.
+    Density,
+    /// Equation of state.
+    Eos,
+    /// IAD matrices.
+    Iad,
+    /// Viscosity switches: velocity divergence and alpha update.
+    Switches,
+    /// Momentum and energy equations.
+    Momentum,
+    /// Artificial conductivity.
+    Conduction,
+    /// Self-gravity.
+    Gravity,
+    /// Halo exchanges of fields between stages (rho, P, c, Omega; IAD;
+    /// div v; alpha).
+    Halos,
+    /// Conserved quantities (one global sum).
+    Conserved,
+    /// Time-step criteria and next-step bounds (one global minimum).
+    Timestep,
+    /// Integrator and h update.
+    Integrate,
+}
+
+/// Names of the timed stages, in pipeline order ([`Stage`]).
+pub const STAGES: [&str; 14] = [
     "sync",
     "tree",
     "neighbors",
     "density",
     "eos",
     "iad",
+    "switches",
     "momentum",
+    "conduction",
     "gravity",
+    "halos",
     "conserved",
+    "timestep",
     "integrate",
 ];
 
-/// Wall-clock seconds per stage, accumulated.
+/// Wall-clock seconds per stage ([`STAGES`] order), accumulated.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct StageTimes(pub [f64; 10]);
+pub struct StageTimes(pub [f64; STAGES.len()]);
 
 impl StageTimes {
     /// Sum over stages.
     pub fn total(&self) -> f64 {
         self.0.iter().sum()
+    }
+
+    /// Seconds of one stage.
+    pub fn get(&self, stage: Stage) -> f64 {
+        self.0[stage as usize]
+    }
+}
+
+/// Charges the time since the last lap to a stage.
+struct StageClock {
+    times: StageTimes,
+    last: Instant,
+}
+
+impl StageClock {
+    fn start() -> Self {
+        Self {
+            times: StageTimes::default(),
+            last: Instant::now(),
+        }
+    }
+
+    fn lap(&mut self, stage: Stage) {
+        let now = Instant::now();
+        self.times.0[stage as usize] += (now - self.last).as_secs_f64();
+        self.last = now;
+    }
+}
+
+/// The extremes of one step over all ranks, from one global minimum
+/// (maxima travel as minima of their negatives).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct StepExtremes {
+    min_h_over_vsig: f64,
+    max_abs_div_v: f64,
+    nc_min: f64,
+    nc_max: f64,
+    owned_min: f64,
+    owned_max: f64,
+    halo_ratio_max: f64,
+    comm_seconds_max: f64,
+    sync_seconds_max: f64,
+    /// Largest |a| (self-gravity runs; 0 otherwise).
+    acc_max: f64,
+    /// Largest `|v_n|` component on open axes (box growth).
+    speed_max: f64,
+    /// Largest `|a|` component on open axes (box growth).
+    acc_component_max: f64,
+    /// Largest h after this step's update (next step's halo reach).
+    h_next_max: f64,
+}
+
+impl StepExtremes {
+    fn all_reduce<C: Communicator>(self, comm: &C) -> Self {
+        let mut m = [
+            self.min_h_over_vsig,
+            -self.max_abs_div_v,
+            self.nc_min,
+            -self.nc_max,
+            self.owned_min,
+            -self.owned_max,
+            -self.halo_ratio_max,
+            -self.comm_seconds_max,
+            -self.sync_seconds_max,
+            -self.acc_max,
+            -self.speed_max,
+            -self.acc_component_max,
+            -self.h_next_max,
+        ];
+        comm.all_reduce(&mut m, ReduceOp::Min);
+        Self {
+            min_h_over_vsig: m[0],
+            max_abs_div_v: -m[1],
+            nc_min: m[2],
+            nc_max: -m[3],
+            owned_min: m[4],
+            owned_max: -m[5],
+            halo_ratio_max: -m[6],
+            comm_seconds_max: -m[7],
+            sync_seconds_max: -m[8],
+            acc_max: -m[9],
+            speed_max: -m[10],
+            acc_component_max: -m[11],
+            h_next_max: -m[12],
+        }
     }
 }
 
@@ -224,27 +357,11 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         comm: C,
         domain: DomainConfig,
     ) -> Result<Self, CoreError> {
-        config.eos.validate()?;
+        config.validate()?;
         if !(dt0 > 0.0 && dt0.is_finite()) {
             return Err(CoreError::Invalid(format!(
                 "first time step {dt0} must be positive"
             )));
-        }
-        if let Some(sw) = config.av_switch {
-            if !sw.is_valid() {
-                return Err(CoreError::Invalid(format!(
-                    "AV switch parameters {sw:?} are invalid: need 0 <= alpha_min <= alpha_max and positive decay"
-                )));
-            }
-        }
-        if !(config.conductivity >= 0.0 && config.conductivity.is_finite()) {
-            return Err(CoreError::Invalid(format!(
-                "conductivity {} must be a finite number >= 0",
-                config.conductivity
-            )));
-        }
-        if config.bucket == 0 {
-            return Err(CoreError::Invalid("bucket size must be at least 1".into()));
         }
         let domain = Domain::new(
             comm,
@@ -286,7 +403,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             p.dy[i] = p.vy[i] * dt0;
             p.dz[i] = p.vz[i] * dt0;
         }
-        if let Some(sw) = self.config.av_switch {
+        if let Some(sw) = self.config.scheme.switches() {
             p.enable_alpha(sw.alpha_min);
         }
     }
@@ -349,149 +466,61 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
 
     /// Advances `p` by one step. Open axes of `bbox` are refitted to the
     /// particles first (of all ranks); periodic axes stay.
+    ///
+    /// # Errors
+    /// Particle arrays of different lengths or without the fields the
+    /// configuration needs ([`HydroConfig::fields`]), and every numerical
+    /// failure, named by particle id and step.
     pub fn step(
         &mut self,
         p: &mut Particles,
         bbox: &mut BoundingBox,
     ) -> Result<StepReport, CoreError> {
         let step = self.step + 1;
-        let mut times = StageTimes::default();
-        let mut clock = Instant::now();
-        let mut lap = |k: usize, times: &mut StageTimes| {
-            let now = Instant::now();
-            times.0[k] += (now - clock).as_secs_f64();
-            clock = now;
-        };
+        p.check(self.config.fields())?;
+        let mut clock = StageClock::start();
 
         let owned = self.domain.sync_with(p, bbox, self.next_h_max.take())?;
-        lap(0, &mut times);
+        clock.lap(Stage::Sync);
         self.tree
             .rebuild(self.domain.keys(), &p.x, &p.y, &p.z, self.config.bucket)?;
-        lap(1, &mut times);
-        let local_stats = self.search(p, bbox, step, owned.clone())?;
-        lap(2, &mut times);
+        clock.lap(Stage::Tree);
+        let neighbours = self.search(p, bbox, step, owned.clone())?;
+        clock.lap(Stage::Neighbors);
         self.density(p, bbox);
-        lap(3, &mut times);
+        clock.lap(Stage::Density);
         self.eos(p, owned.clone())?;
+        clock.lap(Stage::Eos);
         self.exchange_thermo(p)?;
-        lap(4, &mut times);
-
-        if self.config.gradients == Gradients::Iad {
-            let pos = positions!(p);
-            if let Err(s) = iad(&self.kernel, bbox, pos, &p.rho, &self.list, &mut p.iad) {
-                return Err(CoreError::SingularIad {
-                    step,
-                    id: p.id[s.index],
-                    det: s.det,
-                    neighbors: self.list.count(s.index),
-                });
-            }
+        clock.lap(Stage::Halos);
+        if self.config.scheme.gradients == Gradients::Iad {
+            self.iad(p, bbox, step)?;
+            clock.lap(Stage::Iad);
             let [c0, c1, c2, c3, c4, c5] = &mut p.iad;
             self.domain
                 .exchange(&mut [c0, c1, c2, c3, c4, c5].map(|c| c.as_mut_slice()))?;
+            clock.lap(Stage::Halos);
         }
-        lap(5, &mut times);
-
-        let state = hydro_state!(p);
-        self.factors.fill(&state);
-        if let Some(sw) = self.config.av_switch {
-            if p.alpha.len() != p.len() {
-                return Err(CoreError::Invalid(
-                    "AV switches need per-particle alpha: call Hydro::prepare on the particles"
-                        .into(),
-                ));
-            }
-            self.div_v.resize(p.len(), 0.0);
-            let flow = FlowState::from(state);
-            let g = self.config.gradients;
-            velocity_divergence(
-                &self.kernel,
-                bbox,
-                flow,
-                g,
-                &self.list,
-                &mut self.div_v,
-                &mut [],
-            );
-            self.domain.exchange(&mut [self.div_v.as_mut_slice()])?;
-            // Relax over the time since the last update (none before step 1).
-            let elapsed = if step == 1 { 0.0 } else { self.dt_prev };
-            let (list, dv) = (&self.list, &self.div_v);
-            update_alpha(
-                &self.kernel,
-                bbox,
-                flow,
-                g,
-                dv,
-                &sw,
-                elapsed,
-                list,
-                &mut p.alpha,
-            );
-            self.domain.exchange(&mut [p.alpha.as_mut_slice()])?;
+        self.factors.fill(&hydro_state!(p));
+        if let Some(sw) = self.config.scheme.switches() {
+            self.switches(p, bbox, &sw, step, &mut clock)?;
         }
-        let state = hydro_state!(p);
-        let rates = Rates {
-            ax: &mut p.ax,
-            ay: &mut p.ay,
-            az: &mut p.az,
-            du: &mut p.du,
-        };
-        let mstats: MomentumStats = if self.config.av_switch.is_some() {
-            momentum_energy_switched(
-                &self.kernel,
-                bbox,
-                state,
-                &self.factors,
-                self.config.gradients,
-                &p.alpha,
-                &self.list,
-                rates,
-            )
-        } else {
-            momentum_energy(
-                &self.kernel,
-                bbox,
-                state,
-                &self.factors,
-                self.config.gradients,
-                self.config.alpha,
-                &self.list,
-                rates,
-            )
-        };
-        if self.config.conductivity > 0.0 {
+        let forces = self.momentum(p, bbox);
+        clock.lap(Stage::Momentum);
+        if let Some(alpha_u) = self.config.scheme.conductivity {
+            let state = hydro_state!(p);
+            let (list, kernel) = (&self.list, &self.kernel);
             conduction(
-                &self.kernel,
-                bbox,
-                positions!(p),
-                &p.rho,
-                &p.p,
-                &p.u,
-                self.config.conductivity,
-                &self.list,
-                &mut p.du,
+                kernel, bbox, state.pos, state.rho, state.p, &p.u, alpha_u, list, &mut p.du,
             );
+            clock.lap(Stage::Conduction);
         }
         if step == 1 {
             // Adams-Bashforth needs du_{n-1}; the first step uses du_0.
             p.du_prev[owned.clone()].copy_from_slice(&p.du[owned.clone()]);
         }
-        lap(6, &mut times);
-        let mut max_acc = 0.0;
-        if self.gravity.is_some() {
-            self.gravity_field(p, bbox, owned.clone(), step)?;
-            let f = &self.field;
-            for (k, i) in owned.clone().enumerate() {
-                p.ax[i] += f.ax[k];
-                p.ay[i] += f.ay[k];
-                p.az[i] += f.az[k];
-            }
-            max_acc = (owned.clone())
-                .map(|i| (p.ax[i] * p.ax[i] + p.ay[i] * p.ay[i] + p.az[i] * p.az[i]).sqrt())
-                .fold(0.0, f64::max);
-        }
-        lap(7, &mut times);
+        let acc_max = self.add_gravity(p, bbox, owned.clone(), step)?;
+        clock.lap(Stage::Gravity);
 
         // One global sum: conserved quantities, neighbour and domain totals.
         let sync = self.domain.stats();
@@ -499,69 +528,54 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             p,
             owned.clone(),
             [
-                local_stats.total as f64,
-                local_stats.over_cap as f64,
+                neighbours.total as f64,
+                neighbours.over_cap as f64,
                 sync.halos as f64,
                 sync.bytes_sent as f64,
             ],
             self.domain.comm(),
         );
-        lap(8, &mut times);
-
-        // Bounds for the next step's domain: the largest h after this
-        // step's update, and how far a particle can move (open axes).
-        let h_update = self.config.neighbors.h_update(self.config.h_update);
-        let motion = self.motion_bounds(p, bbox, owned.clone(), h_update);
+        clock.lap(Stage::Conserved);
 
         // One global minimum: time-step criteria, neighbour and domain
-        // extremes, next-step bounds (maxima as minima of negatives).
-        let mut mins = [
-            mstats.min_h_over_vsig,
-            -mstats.max_abs_div_v,
-            local_stats.min_count as f64,
-            -(local_stats.max_count as f64),
-            sync.owned as f64,
-            -(sync.owned as f64),
-            -(sync.halos as f64 / sync.owned.max(1) as f64),
-            -sync.comm_seconds,
-            -sync.sync_seconds,
-            -max_acc,
-            -motion[0],
-            -motion[1],
-            -motion[2],
-        ];
-        if owned.is_empty() {
-            mins[2] = f64::INFINITY;
-            mins[3] = f64::INFINITY;
+        // extremes, and the next step's bounds: the largest h after this
+        // step's update, and how far a particle can move (open axes).
+        let h_update = self.config.neighbors.h_update(self.config.h_update);
+        let [speed_max, acc_component_max, h_next_max] =
+            self.motion_bounds(p, bbox, owned.clone(), h_update);
+        let (nc_min, nc_max) = if owned.is_empty() {
+            (f64::INFINITY, f64::NEG_INFINITY)
+        } else {
+            (neighbours.min_count as f64, neighbours.max_count as f64)
+        };
+        let ext = StepExtremes {
+            min_h_over_vsig: forces.min_h_over_vsig,
+            max_abs_div_v: forces.max_abs_div_v,
+            nc_min,
+            nc_max,
+            owned_min: sync.owned as f64,
+            owned_max: sync.owned as f64,
+            halo_ratio_max: sync.halos as f64 / sync.owned.max(1) as f64,
+            comm_seconds_max: sync.comm_seconds,
+            sync_seconds_max: sync.sync_seconds,
+            acc_max,
+            speed_max,
+            acc_component_max,
+            h_next_max,
         }
-        self.domain.comm().all_reduce(&mut mins, ReduceOp::Min);
+        .all_reduce(self.domain.comm());
         let global = MomentumStats {
-            min_h_over_vsig: mins[0],
-            max_abs_div_v: -mins[1],
-        };
-        let neighbors = NeighborStats {
-            min_count: mins[2] as usize,
-            max_count: (-mins[3]) as usize,
-            total: nc_total as usize,
-            over_cap: over_cap as usize,
-            // A local index: only meaningful on this rank.
-            first_over_cap: local_stats.first_over_cap,
-        };
-        let domain = DomainStepStats {
-            owned_min: mins[4] as usize,
-            owned_max: (-mins[5]) as usize,
-            halos_total: halos_total as usize,
-            halo_ratio_max: -mins[6],
-            bytes_sent: bytes_sent as u64,
-            comm_seconds_max: -mins[7],
-            sync_seconds_max: -mins[8],
+            min_h_over_vsig: ext.min_h_over_vsig,
+            max_abs_div_v: ext.max_abs_div_v,
         };
         let dt = self
             .config
             .timestep
-            .dt(&global, -mins[9], self.dt_prev)
+            .dt(&global, ext.acc_max, self.dt_prev)
             .min(self.dt_cap);
         self.dt_cap = f64::INFINITY;
+        clock.lap(Stage::Timestep);
+
         let guard = self.config.eos.uses_internal_energy();
         let report = integrate(
             p,
@@ -575,10 +589,10 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         )?;
         // The same box on every rank, holding every particle after the
         // move: |dx| <= (max |v_n| + max |a| dt / 2) dt on each axis.
-        let reach = (-mins[10] + 0.5 * -mins[11] * dt) * dt;
+        let reach = (ext.speed_max + 0.5 * ext.acc_component_max * dt) * dt;
         grow_open_axes(bbox, reach)?;
-        self.next_h_max = Some(-mins[12]);
-        lap(9, &mut times);
+        self.next_h_max = Some(ext.h_next_max);
+        clock.lap(Stage::Integrate);
 
         let t = self.t;
         self.t += dt;
@@ -589,11 +603,128 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             t,
             dt,
             conserved,
-            neighbors,
-            times,
+            neighbors: NeighborStats {
+                min_count: ext.nc_min as usize,
+                max_count: ext.nc_max as usize,
+                total: nc_total as usize,
+                over_cap: over_cap as usize,
+                // A local index: only meaningful on this rank.
+                first_over_cap: neighbours.first_over_cap,
+            },
+            times: clock.times,
             energy_fallbacks: report.energy_fallbacks,
-            domain,
+            domain: DomainStepStats {
+                owned_min: ext.owned_min as usize,
+                owned_max: ext.owned_max as usize,
+                halos_total: halos_total as usize,
+                halo_ratio_max: ext.halo_ratio_max,
+                bytes_sent: bytes_sent as u64,
+                comm_seconds_max: ext.comm_seconds_max,
+                sync_seconds_max: ext.sync_seconds_max,
+            },
         })
+    }
+
+    /// The IAD matrices of the owned particles.
+    fn iad(&self, p: &mut Particles, bbox: &BoundingBox, step: u64) -> Result<(), CoreError> {
+        let pos = positions!(p);
+        iad(&self.kernel, bbox, pos, &p.rho, &self.list, &mut p.iad).map_err(|s| {
+            CoreError::SingularIad {
+                step,
+                id: p.id[s.index],
+                det: s.det,
+                neighbors: self.list.count(s.index),
+            }
+        })
+    }
+
+    /// The viscosity switches: velocity divergence, exchanged to the halos,
+    /// then alpha advanced over the time since its last update (none before
+    /// step 1), exchanged too (the momentum stage reads the halos' alpha).
+    fn switches(
+        &mut self,
+        p: &mut Particles,
+        bbox: &BoundingBox,
+        sw: &AvSwitchParams,
+        step: u64,
+        clock: &mut StageClock,
+    ) -> Result<(), CoreError> {
+        self.div_v.resize(p.len(), 0.0);
+        let flow = FlowState::from(hydro_state!(p));
+        let g = self.config.scheme.gradients;
+        let (kernel, list) = (&self.kernel, &self.list);
+        velocity_divergence(kernel, bbox, flow, g, list, &mut self.div_v, &mut []);
+        clock.lap(Stage::Switches);
+        self.domain.exchange(&mut [self.div_v.as_mut_slice()])?;
+        clock.lap(Stage::Halos);
+        let elapsed = if step == 1 { 0.0 } else { self.dt_prev };
+        let flow = FlowState::from(hydro_state!(p));
+        update_alpha(
+            kernel,
+            bbox,
+            flow,
+            g,
+            &self.div_v,
+            sw,
+            elapsed,
+            list,
+            &mut p.alpha,
+        );
+        clock.lap(Stage::Switches);
+        self.domain.exchange(&mut [p.alpha.as_mut_slice()])?;
+        clock.lap(Stage::Halos);
+        Ok(())
+    }
+
+    /// Accelerations and du/dt of the owned particles, with the scheme's
+    /// viscosity.
+    fn momentum(&self, p: &mut Particles, bbox: &BoundingBox) -> MomentumStats {
+        let state = hydro_state!(p);
+        let rates = Rates {
+            ax: &mut p.ax,
+            ay: &mut p.ay,
+            az: &mut p.az,
+            du: &mut p.du,
+        };
+        let (k, f, g, list) = (
+            &self.kernel,
+            &self.factors,
+            self.config.scheme.gradients,
+            &self.list,
+        );
+        match self.config.scheme.viscosity {
+            Viscosity::Constant { alpha } => {
+                momentum_energy(k, bbox, state, f, g, alpha, list, rates)
+            }
+            Viscosity::Switched(_) => {
+                momentum_energy_switched(k, bbox, state, f, g, &p.alpha, list, rates)
+            }
+        }
+    }
+
+    /// Adds self-gravity to the owned particles' accelerations (when the
+    /// run has it) and returns their largest |a| (0 without gravity: the
+    /// acceleration criterion is off).
+    fn add_gravity(
+        &mut self,
+        p: &mut Particles,
+        bbox: &BoundingBox,
+        owned: Range<usize>,
+        step: u64,
+    ) -> Result<f64, CoreError> {
+        if self.gravity.is_none() {
+            return Ok(0.0);
+        }
+        self.gravity_field(p, bbox, owned.clone(), step)?;
+        let f = &self.field;
+        for (k, i) in owned.clone().enumerate() {
+            p.ax[i] += f.ax[k];
+            p.ay[i] += f.ay[k];
+            p.az[i] += f.az[k];
+        }
+        Ok(owned
+            .map(|i| (p.ax[i] * p.ax[i] + p.ay[i] * p.ay[i] + p.az[i] * p.az[i]).sqrt())
+            .fold(0.0, f64::max))
     }
 }
 

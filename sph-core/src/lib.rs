@@ -64,6 +64,7 @@ pub mod momentum;
 pub mod neighbors;
 pub mod pair_loop;
 mod particles;
+pub mod scheme;
 pub mod timestep;
 
 pub use av_switch::AvSwitchParams;
@@ -75,4 +76,5 @@ pub use integrate::HUpdate;
 pub use neighbors::NeighborParams;
 pub use pair_loop::Gradients;
 pub use particles::{FieldSet, Particles};
+pub use scheme::{Scheme, Viscosity, PRESETS};
 pub use timestep::TimestepParams;

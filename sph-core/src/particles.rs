@@ -270,24 +270,59 @@ impl Particles {
         self.nc.drain(..range.start.min(self.nc.len()));
     }
 
-    /// Checks that every array has the same length.
-    pub fn check(&self) -> Result<(), crate::CoreError> {
+    /// Checks that every array holds one entry per particle and that the
+    /// optional fields `needed` are present.
+    ///
+    /// # Errors
+    /// [`CoreError::Invalid`](crate::CoreError::Invalid) naming the first
+    /// array of the wrong length, or the missing field.
+    pub fn check(&self, needed: FieldSet) -> Result<(), crate::CoreError> {
         let n = self.len();
-        let lens = [
+        let mut lens = vec![
             ("id", self.id.len()),
             ("y", self.y.len()),
             ("z", self.z.len()),
             ("vx", self.vx.len()),
             ("vy", self.vy.len()),
             ("vz", self.vz.len()),
+            ("dx", self.dx.len()),
+            ("dy", self.dy.len()),
+            ("dz", self.dz.len()),
             ("h", self.h.len()),
             ("m", self.m.len()),
             ("u", self.u.len()),
+            ("rho", self.rho.len()),
+            ("p", self.p.len()),
+            ("c", self.c.len()),
+            ("ax", self.ax.len()),
+            ("ay", self.ay.len()),
+            ("az", self.az.len()),
+            ("du", self.du.len()),
+            ("du_prev", self.du_prev.len()),
+            ("nc", self.nc.len()),
         ];
+        let optional = [
+            ("omega (grad-h)", &self.omega, needed.grad_h),
+            ("phi (self-gravity)", &self.phi, needed.gravity),
+            ("alpha (viscosity switches)", &self.alpha, self.alpha_on),
+        ];
+        for (name, v, on) in optional {
+            if on || !v.is_empty() {
+                lens.push((name, v.len()));
+            }
+        }
+        for (k, c) in self.iad.iter().enumerate() {
+            if needed.iad || !c.is_empty() {
+                lens.push((
+                    ["iad xx", "iad xy", "iad xz", "iad yy", "iad yz", "iad zz"][k],
+                    c.len(),
+                ));
+            }
+        }
         for (name, l) in lens {
             if l != n {
                 return Err(crate::CoreError::Invalid(format!(
-                    "field {name} has {l} entries, x has {n}"
+                    "field {name} has {l} entries for {n} particles (x has {n}); build the particles with the run's FieldSet"
                 )));
             }
         }

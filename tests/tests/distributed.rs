@@ -56,19 +56,19 @@ fn scene(case: &str) -> Scene {
     let (_, side, _) = CASES.iter().find(|c| c.0 == case).expect("known case");
     // Each case with its own scheme (noh: kernel gradients and viscosity
     // switches, whose halo refreshes of div v and alpha this exercises).
-    let with = |scheme: cases::Scheme| {
-        let mut config = HydroConfig::default();
-        scheme.apply(&mut config);
-        config
+    // (evrard: no gravity parameters given, so the case's own.)
+    let with = |info: &cases::CaseInfo| HydroConfig {
+        scheme: info.scheme,
+        ..HydroConfig::default()
     };
     let config = HydroConfig::default();
     match case {
-        "sedov" => cases::sedov::setup(*side, with(cases::sedov::INFO.scheme)).unwrap(),
+        "sedov" => cases::sedov::setup(*side, with(&cases::sedov::INFO)).unwrap(),
         "square-patch" => {
-            cases::square_patch::setup(*side, with(cases::square_patch::INFO.scheme)).unwrap()
+            cases::square_patch::setup(*side, with(&cases::square_patch::INFO)).unwrap()
         }
-        "noh" => cases::noh::setup(*side, with(cases::noh::INFO.scheme)).unwrap(),
-        "evrard" => cases::evrard::setup(*side, with(cases::evrard::INFO.scheme)).unwrap(),
+        "noh" => cases::noh::setup(*side, with(&cases::noh::INFO)).unwrap(),
+        "evrard" => cases::evrard::setup(*side, with(&cases::evrard::INFO)).unwrap(),
         "drift" => {
             // Uniform warm gas moving as a whole through the periodic box.
             let mut s = cases::sedov::setup(*side, config).unwrap();

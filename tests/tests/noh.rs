@@ -15,8 +15,10 @@ use sph_core::HydroConfig;
 
 #[test]
 fn noh_30_equivalent_reaches_the_plateau_and_conserves_energy() {
-    let mut config = HydroConfig::default();
-    noh::INFO.scheme.apply(&mut config);
+    let config = HydroConfig {
+        scheme: noh::INFO.scheme,
+        ..HydroConfig::default()
+    };
     let scene = noh::setup(37, config).unwrap();
     let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("noh37");
     let s = sph_validation::run(scene, Stop::Time(0.3), &out);

@@ -5,7 +5,7 @@ use sph_apps::cases::{self, CASES};
 use sph_apps::simulation::{Progress, Stop};
 use sph_apps::{AppError, Simulation};
 use sph_comm::Communicator;
-use sph_core::{Gradients, HydroConfig};
+use sph_core::{Gradients, HydroConfig, Scheme};
 use sph_kernels::{KernelChoice, Tabulated};
 use sph_tree::Curve;
 use std::path::PathBuf;
@@ -81,7 +81,12 @@ struct RunArgs {
     /// Largest accepted neighbour count before h is iterated.
     #[arg(long, default_value_t = 150)]
     ngmax: usize,
-    /// Gradient operator (default: the case's; iad for all but evrard).
+    /// Scheme preset to start from (default: the case's own): `paper`
+    /// (the seed paper's eqs. 1-5: IAD, grad-h, alpha = 1), `noh`, `evrard`
+    /// (see `sphexa cases`); the options below override it one by one.
+    #[arg(long, value_name = "NAME")]
+    scheme: Option<String>,
+    /// Gradient operator (default: the scheme's; iad for `paper`).
     #[arg(long, value_enum)]
     gradients: Option<GradientArg>,
     /// Space-filling curve for sorting particles.
@@ -108,8 +113,9 @@ struct RunArgs {
     av_switches: Option<Switch>,
     /// Artificial conductivity of internal energy alpha_u (0 = off, the
     /// paper's scheme; ~1 smooths wall heating at shocks and walls).
-    #[arg(long, default_value_t = 0.0)]
-    conductivity: f64,
+    /// Default: the scheme's (off in every preset).
+    #[arg(long)]
+    conductivity: Option<f64>,
     /// Self-gravity: opening angle theta of the tree (cases with gravity).
     #[arg(long, default_value_t = 0.5)]
     theta: f64,
@@ -216,21 +222,26 @@ fn run(a: RunArgs) -> Result<(), AppError> {
     config.neighbors.ng0 = a.ng0;
     config.neighbors.ngmax = a.ngmax;
     config.timestep.k_courant = a.courant;
-    if !(a.conductivity >= 0.0 && a.conductivity.is_finite()) {
-        return Err(AppError::Usage(format!(
-            "--conductivity {} must be >= 0",
-            a.conductivity
-        )));
-    }
-    config.conductivity = a.conductivity;
     if !(a.theta > 0.0 && a.theta.is_finite()) {
         return Err(AppError::Usage(format!(
             "--theta {} must be positive",
             a.theta
         )));
     }
-    // The case's scheme, then what the command line overrides.
-    let mut scheme = info.scheme;
+    // The case's scheme (or a named preset), then what the command line
+    // overrides.
+    let mut scheme = match &a.scheme {
+        Some(name) => Scheme::preset(name)?,
+        None => info.scheme,
+    };
+    if let Some(c) = a.conductivity {
+        if !(c >= 0.0 && c.is_finite()) {
+            return Err(AppError::Usage(format!(
+                "--conductivity {c} must be a finite number >= 0 (0 = off)"
+            )));
+        }
+        scheme.conductivity = (c > 0.0).then_some(c);
+    }
     if let Some(g) = a.gradients {
         scheme.gradients = match g {
             GradientArg::Iad => Gradients::Iad,
@@ -241,7 +252,7 @@ fn run(a: RunArgs) -> Result<(), AppError> {
         if !(alpha >= 0.0 && alpha.is_finite()) {
             return Err(AppError::Usage(format!("--alpha {alpha} must be >= 0")));
         }
-        scheme.alpha = alpha;
+        scheme.set_alpha(alpha);
     }
     if let Some(g) = a.grad_h {
         scheme.grad_h = g == Switch::On;
@@ -250,20 +261,22 @@ fn run(a: RunArgs) -> Result<(), AppError> {
         scheme.grad_h = false;
     }
     if let Some(s) = a.av_switches {
-        scheme.av_switches = s == Switch::On;
+        scheme.set_switches(s == Switch::On);
     }
-    if let Some(s) = a.softening {
-        if !(s >= 0.0 && s.is_finite()) {
-            return Err(AppError::Usage(format!("--softening {s} must be >= 0")));
-        }
-        scheme.softening = s;
+    let softening = a.softening.unwrap_or(info.softening);
+    if !(softening >= 0.0 && softening.is_finite()) {
+        return Err(AppError::Usage(format!(
+            "--softening {softening} must be >= 0"
+        )));
     }
+    scheme.validate()?;
+    config.scheme = scheme;
     // Cases without self-gravity drop these parameters.
     config.gravity = Some(sph_gravity::GravityParams {
         theta: a.theta,
+        softening,
         ..Default::default()
     });
-    scheme.apply(&mut config);
 
     let scene = match info.name {
         "sedov" => cases::sedov::setup(side, config)?,

@@ -23,51 +23,12 @@ pub struct CaseInfo {
     pub default_end_time: f64,
     /// The scheme the case runs with unless told otherwise.
     pub scheme: Scheme,
-}
-
-/// The numerical choices a case defaults to (each can be overridden on the
-/// command line).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Scheme {
-    /// Gradient operator.
-    pub gradients: sph_core::Gradients,
-    /// Whether the grad-h factor Omega enters.
-    pub grad_h: bool,
-    /// Viscosity strength (the maximum when switches are on).
-    pub alpha: f64,
-    /// Time-dependent viscosity switches.
-    pub av_switches: bool,
-    /// Self-gravity softening scale (pairs softened within
-    /// `softening * (h_i + h_j)`).
+    /// Self-gravity softening scale the case runs with (pairs softened
+    /// within `softening * (h_i + h_j)`; cases with self-gravity).
     pub softening: f64,
 }
 
-impl Scheme {
-    /// The SPH-EXA paper's scheme ("std"): IAD gradients, grad-h terms,
-    /// constant alpha = 1.
-    pub const PAPER: Scheme = Scheme {
-        gradients: sph_core::Gradients::Iad,
-        grad_h: true,
-        alpha: 1.0,
-        av_switches: false,
-        softening: 1.0,
-    };
-
-    /// Writes these choices into `config` (gravity parameters only where
-    /// `config` already has gravity on).
-    pub fn apply(&self, config: &mut HydroConfig) {
-        config.gradients = self.gradients;
-        config.grad_h = self.grad_h;
-        config.alpha = self.alpha;
-        config.av_switch = self.av_switches.then(|| sph_core::AvSwitchParams {
-            alpha_max: self.alpha,
-            ..Default::default()
-        });
-        if let Some(g) = config.gravity.as_mut() {
-            g.softening = self.softening;
-        }
-    }
-}
+pub use sph_core::Scheme;
 
 /// Every case, in listing order.
 pub const CASES: [CaseInfo; 4] = [sedov::INFO, noh::INFO, square_patch::INFO, evrard::INFO];

@@ -14,6 +14,7 @@ pub const INFO: CaseInfo = CaseInfo {
     description: "Noh implosion of a cold sphere vs the exact solution (64x compression)",
     default_side: 37,
     scheme: SCHEME,
+    softening: 1.0,
     default_end_time: 0.3,
 };
 
@@ -25,13 +26,7 @@ pub const INFO: CaseInfo = CaseInfo {
 /// 62 rho0 at 33552 (40^3 cut), flat within a few percent there; alpha_max
 /// 0.5 overshoots (76 rho0 at 30^3, a hump instead of a plateau) and 1.0
 /// undershoots (40 rho0).
-pub const SCHEME: super::Scheme = super::Scheme {
-    gradients: sph_core::Gradients::Kernel,
-    grad_h: true,
-    alpha: 0.7,
-    av_switches: true,
-    softening: 1.0,
-};
+pub const SCHEME: super::Scheme = super::Scheme::NOH;
 
 /// Adiabatic index.
 pub const GAMMA: f64 = 5.0 / 3.0;
@@ -56,8 +51,8 @@ pub fn setup(side: usize, mut config: HydroConfig) -> Result<Scene, AppError> {
     let mut p = Particles::new(
         n,
         FieldSet {
-            iad: config.gradients == sph_core::Gradients::Iad,
-            grad_h: config.grad_h,
+            iad: config.scheme.gradients == sph_core::Gradients::Iad,
+            grad_h: config.scheme.grad_h,
             gravity: false,
         },
     );

@@ -14,6 +14,7 @@ pub const INFO: CaseInfo = CaseInfo {
     description: "Sedov-Taylor blast wave in a periodic box vs the similarity solution",
     default_side: 30,
     scheme: super::Scheme::PAPER,
+    softening: 1.0,
     default_end_time: 0.05,
 };
 
@@ -32,8 +33,8 @@ pub fn setup(side: usize, mut config: HydroConfig) -> Result<Scene, AppError> {
     let mut p = Particles::new(
         n,
         FieldSet {
-            iad: config.gradients == sph_core::Gradients::Iad,
-            grad_h: config.grad_h,
+            iad: config.scheme.gradients == sph_core::Gradients::Iad,
+            grad_h: config.scheme.grad_h,
             gravity: false,
         },
     );

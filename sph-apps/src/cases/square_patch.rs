@@ -15,6 +15,7 @@ pub const INFO: CaseInfo = CaseInfo {
     description: "Rotating square patch (stiff Tait EOS, free surface); checks angular momentum",
     default_side: 20,
     scheme: super::Scheme::PAPER,
+    softening: 1.0,
     default_end_time: 0.05,
 };
 
@@ -60,8 +61,8 @@ pub fn setup(side: usize, mut config: HydroConfig) -> Result<Scene, AppError> {
     let mut p = Particles::new(
         n,
         FieldSet {
-            iad: config.gradients == sph_core::Gradients::Iad,
-            grad_h: config.grad_h,
+            iad: config.scheme.gradients == sph_core::Gradients::Iad,
+            grad_h: config.scheme.grad_h,
             gravity: false,
         },
     );
