@@ -1,9 +1,22 @@
 //! Observables of a finished run: radial profiles, L1 errors against a
-//! reference, shock radius, peak density, closest pair.
+//! reference, shock radius, plateau density, peak density, closest pair and
+//! the scales of the drift figures.
+//!
+//! Each observable is a distributed reduction: every rank passes its own
+//! particles (`owned`, a range of the local arrays, which also hold halos)
+//! and the communicator, every rank gets the global result, and no particle
+//! leaves its rank. Floating-point sums are exact ([`ExactSum`]), so the
+//! results do not depend on the number of ranks or threads.
 
 use crate::cases::Reference;
+use rayon::prelude::*;
 use serde::Serialize;
+use sph_comm::{Communicator, ExactSum, ReduceOp};
 use sph_core::Particles;
+use std::ops::Range;
+
+/// Particles per rayon task of the exact sums.
+const CHUNK: usize = 1 << 14;
 
 /// Per-particle mean absolute errors against the reference.
 #[derive(Debug, Clone, Copy, Serialize, Default)]
@@ -24,20 +37,60 @@ fn speed(p: &Particles, i: usize) -> f64 {
     (p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i] + p.vz[i] * p.vz[i]).sqrt()
 }
 
-/// `1/N sum_i |f_i - f_ref(r_i)|` over all particles, for rho, P and |v|.
-pub fn l1(p: &Particles, reference: &Reference, t: f64) -> L1 {
-    let n = p.len().max(1) as f64;
-    let mut e = L1::default();
-    for i in 0..p.len() {
-        let s = reference.state(radius(p, i), t);
-        e.rho += (p.rho[i] - s.rho).abs();
-        e.p += (p.p[i] - s.p).abs();
-        e.v += (speed(p, i) - s.v.abs()).abs();
+/// `n` exact sums over the owned particles of every rank: `add(i, sums)`
+/// adds particle `i`'s terms. One all-reduce.
+fn exact_sums<C, F>(owned: Range<usize>, n: usize, comm: &C, add: F) -> Vec<ExactSum>
+where
+    C: Communicator,
+    F: Fn(usize, &mut [ExactSum]) + Sync,
+{
+    let zero = || vec![ExactSum::new(); n];
+    let mut sums = (0..owned.len().div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let mut s = zero();
+            let lo = owned.start + c * CHUNK;
+            for i in lo..(lo + CHUNK).min(owned.end) {
+                add(i, &mut s);
+            }
+            s
+        })
+        .reduce(zero, |mut a, b| {
+            for (x, y) in a.iter_mut().zip(&b) {
+                x.merge(y);
+            }
+            a
+        });
+    ExactSum::all_reduce_many(&mut sums, comm);
+    sums
+}
+
+/// Number of particles on all ranks.
+pub fn count<C: Communicator>(owned: Range<usize>, comm: &C) -> usize {
+    comm.all_reduce_scalar(owned.len(), ReduceOp::Sum)
+}
+
+/// `1/N sum_i |f_i - f_ref(r_i)|` over all particles of all ranks, for rho,
+/// P and |v|.
+pub fn l1<C: Communicator>(
+    p: &Particles,
+    owned: Range<usize>,
+    comm: &C,
+    reference: &Reference,
+    t: f64,
+) -> L1 {
+    let n = count(owned.clone(), comm).max(1) as f64;
+    let s = exact_sums(owned, 3, comm, |i, s| {
+        let r = reference.state(radius(p, i), t);
+        s[0].add((p.rho[i] - r.rho).abs());
+        s[1].add((p.p[i] - r.p).abs());
+        s[2].add((speed(p, i) - r.v.abs()).abs());
+    });
+    L1 {
+        rho: s[0].value() / n,
+        p: s[1].value() / n,
+        v: s[2].value() / n,
     }
-    e.rho /= n;
-    e.p /= n;
-    e.v /= n;
-    e
 }
 
 /// One radial bin of the particle profile and the reference.
@@ -61,39 +114,47 @@ pub struct Bin {
     pub v_ref: f64,
 }
 
-/// Mean rho, P, |v| in `nbins` radial bins on `[0, r_max]`.
-pub fn radial_profile(
+/// Mean rho, P, |v| of all ranks' particles in `nbins` radial bins on
+/// `[0, r_max]`: per-bin counts and exact sums, reduced over the ranks.
+pub fn radial_profile<C: Communicator>(
     p: &Particles,
+    owned: Range<usize>,
+    comm: &C,
     reference: Option<&Reference>,
     t: f64,
     r_max: f64,
     nbins: usize,
 ) -> Vec<Bin> {
     let dr = r_max / nbins as f64;
-    let mut sums = vec![(0usize, 0.0, 0.0, 0.0); nbins];
-    for i in 0..p.len() {
-        let k = (radius(p, i) / dr) as usize;
-        if k < nbins {
-            let s = &mut sums[k];
-            s.0 += 1;
-            s.1 += p.rho[i];
-            s.2 += p.p[i];
-            s.3 += speed(p, i);
-        }
+    let bin = |i: usize| Some((radius(p, i) / dr) as usize).filter(|&k| k < nbins);
+    let mut counts = vec![0usize; nbins];
+    for k in owned.clone().filter_map(bin) {
+        counts[k] += 1;
     }
-    sums.iter()
+    comm.all_reduce(&mut counts, ReduceOp::Sum);
+    let sums = exact_sums(owned, 3 * nbins, comm, |i, s| {
+        if let Some(k) = bin(i) {
+            s[3 * k].add(p.rho[i]);
+            s[3 * k + 1].add(p.p[i]);
+            s[3 * k + 2].add(speed(p, i));
+        }
+    });
+    counts
+        .iter()
+        .zip(sums.chunks_exact(3))
         .enumerate()
-        .map(|(k, s)| {
+        .map(|(k, (&count, s))| {
             let r = (k as f64 + 0.5) * dr;
-            let c = s.0.max(1) as f64;
+            let c = count.max(1) as f64;
             let nan = f64::NAN;
+            let mean = |s: &ExactSum| if count > 0 { s.value() / c } else { nan };
             let refs = reference.map(|rf| rf.state(r, t));
             Bin {
                 r,
-                count: s.0,
-                rho: if s.0 > 0 { s.1 / c } else { nan },
-                p: if s.0 > 0 { s.2 / c } else { nan },
-                v: if s.0 > 0 { s.3 / c } else { nan },
+                count,
+                rho: mean(&s[0]),
+                p: mean(&s[1]),
+                v: mean(&s[2]),
                 rho_ref: refs.map_or(nan, |x| x.rho),
                 p_ref: refs.map_or(nan, |x| x.p),
                 v_ref: refs.map_or(nan, |x| x.v.abs()),
@@ -110,29 +171,60 @@ pub fn peak_radius(bins: &[Bin]) -> f64 {
         .map_or(f64::NAN, |b| b.r)
 }
 
-/// Mean density of the particles with radius in `[r0, r1)`.
-pub fn mean_density_in_shell(p: &Particles, r0: f64, r1: f64) -> f64 {
-    let (mut s, mut c) = (0.0, 0usize);
-    for i in 0..p.len() {
+/// Mean density of all ranks' particles with radius in `[r0, r1)` (NaN if
+/// there are none).
+pub fn mean_density_in_shell<C: Communicator>(
+    p: &Particles,
+    owned: Range<usize>,
+    comm: &C,
+    r0: f64,
+    r1: f64,
+) -> f64 {
+    let inside = |i: usize| {
         let r = radius(p, i);
-        if r >= r0 && r < r1 {
-            s += p.rho[i];
-            c += 1;
+        r >= r0 && r < r1
+    };
+    let c = comm.all_reduce_scalar(owned.clone().filter(|&i| inside(i)).count(), ReduceOp::Sum);
+    let s = exact_sums(owned, 1, comm, |i, s| {
+        if inside(i) {
+            s[0].add(p.rho[i]);
         }
-    }
+    });
     if c == 0 {
         f64::NAN
     } else {
-        s / c as f64
+        s[0].value() / c as f64
     }
 }
 
-/// Smallest distance between two particles among each particle's
-/// neighbours (self excluded), from the last neighbour lists.
-pub fn min_pair_distance(
+/// Highest density of all ranks' particles (-inf if there are none).
+pub fn peak_density<C: Communicator>(p: &Particles, owned: Range<usize>, comm: &C) -> f64 {
+    let local = p.rho[owned]
+        .iter()
+        .cloned()
+        .fold(f64::NEG_INFINITY, f64::max);
+    comm.all_reduce_scalar(local, ReduceOp::Max)
+}
+
+/// The scales of the drift figures over all ranks' particles:
+/// `[sum m |v|, sum m |x| |v|]` (exact sums).
+pub fn drift_scales<C: Communicator>(p: &Particles, owned: Range<usize>, comm: &C) -> [f64; 2] {
+    let s = exact_sums(owned, 2, comm, |i, s| {
+        let v = p.vx[i].hypot(p.vy[i]).hypot(p.vz[i]);
+        s[0].add(p.m[i] * v);
+        s[1].add(p.m[i] * p.x[i].hypot(p.y[i]).hypot(p.z[i]) * v);
+    });
+    [s[0].value(), s[1].value()]
+}
+
+/// Smallest distance between two particles among each owned particle's
+/// neighbours (self excluded), from the last neighbour lists, over all
+/// ranks.
+pub fn min_pair_distance<C: Communicator>(
     p: &Particles,
     list: &sph_tree::CompactNeighborList,
     bbox: &sph_tree::BoundingBox,
+    comm: &C,
 ) -> f64 {
     let mut best = f64::INFINITY;
     for i in list.targets() {
@@ -143,7 +235,7 @@ pub fn min_pair_distance(
             }
         }
     }
-    best.sqrt()
+    comm.all_reduce_scalar(best.sqrt(), ReduceOp::Min)
 }
 
 /// Peak resident memory of this process (bytes), from /proc (0 elsewhere).

@@ -1,0 +1,23 @@
+//! The writers of a run's outputs, one concept per module. The run loop in
+//! [`crate::simulation`] feeds them; none of them gathers particles on one
+//! rank.
+//!
+//! | file | module | written by |
+//! | --- | --- | --- |
+//! | `conserved.csv` | [`conserved`] | rank 0, one line per step |
+//! | `timings.csv` | [`timings`] | rank 0, one line per step and the means |
+//! | `profile.csv`, `profile.png` | [`profile`] | rank 0, from the reduced profile |
+//! | `energies.png` | [`energies`] | rank 0, from the per-step energies |
+//! | `particles.csv` | [`particles`] | rank 0, streamed from every rank in bounded chunks |
+//! | `summary.json` | [`summary`] | rank 0, last |
+
+pub mod conserved;
+mod csv;
+pub mod energies;
+pub mod particles;
+pub mod profile;
+pub mod progress;
+pub mod summary;
+pub mod timings;
+
+pub use csv::CsvFile;

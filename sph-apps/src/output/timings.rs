@@ -1,0 +1,168 @@
+//! `timings.csv` and the timing figures of the summary: seconds per stage
+//! (one column per name of [`STAGES`]) and decomposition figures, per step
+//! and as means over steps 2..N (step 1 holds set-up costs).
+
+use super::CsvFile;
+use crate::simulation::DomainSummary;
+use crate::AppError;
+use sph_core::{StepReport, STAGES};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// Sums of the per-step figures over steps 2..N, and the last step's.
+#[derive(Debug, Clone)]
+pub struct StageTotals {
+    total: usize,
+    stage_sum: Vec<f64>,
+    domain: DomainSummary,
+    timed_steps: u64,
+    last_total: Option<f64>,
+}
+
+impl StageTotals {
+    /// Nothing recorded yet, for a run with `total` particles (the
+    /// denominator of the halo ratio).
+    pub fn new(total: usize) -> Self {
+        Self {
+            total,
+            stage_sum: vec![0.0; STAGES.len()],
+            domain: DomainSummary::default(),
+            timed_steps: 0,
+            last_total: None,
+        }
+    }
+
+    /// Halos over owned particles, all ranks together, in step `r`.
+    fn halo_ratio(&self, r: &StepReport) -> f64 {
+        r.domain.halos_total as f64 / self.total.max(1) as f64
+    }
+
+    /// Adds step `r` (to the means from step 2 on).
+    pub fn record(&mut self, r: &StepReport) {
+        let d = r.domain;
+        if r.step >= 2 {
+            for (s, t) in self.stage_sum.iter_mut().zip(r.times.0.iter()) {
+                *s += t;
+            }
+            let halo_ratio = self.halo_ratio(r);
+            let dom = &mut self.domain;
+            dom.halo_ratio_mean += halo_ratio;
+            dom.halo_ratio_max += d.halo_ratio_max;
+            dom.bytes_sent_per_step += d.bytes_sent as f64;
+            dom.comm_seconds_per_step += d.comm_seconds_max;
+            dom.sync_seconds_per_step += d.sync_seconds_max;
+            self.timed_steps += 1;
+        }
+        (self.domain.owned_min, self.domain.owned_max) = (d.owned_min, d.owned_max);
+        self.last_total = Some(r.times.total());
+    }
+
+    fn steps_div(&self) -> f64 {
+        self.timed_steps.max(1) as f64
+    }
+
+    /// Mean seconds per step over steps 2..N (the only step's time if the
+    /// run had one, NaN if none).
+    pub fn mean_step_s(&self) -> f64 {
+        if self.timed_steps > 0 {
+            self.stage_sum.iter().sum::<f64>() / self.timed_steps as f64
+        } else {
+            self.last_total.unwrap_or(f64::NAN)
+        }
+    }
+
+    /// Mean seconds per stage over steps 2..N, in the order of [`STAGES`].
+    pub fn stage_means(&self) -> Vec<f64> {
+        let k = self.steps_div();
+        self.stage_sum.iter().map(|s| s / k).collect()
+    }
+
+    /// Mean seconds per stage over steps 2..N, by stage name.
+    pub fn stage_seconds(&self) -> BTreeMap<String, f64> {
+        STAGES
+            .iter()
+            .map(|name| name.to_string())
+            .zip(self.stage_means())
+            .collect()
+    }
+
+    /// Decomposition figures: means over steps 2..N, owned counts of the
+    /// last step.
+    pub fn domain(&self) -> DomainSummary {
+        let k = self.steps_div();
+        let d = self.domain;
+        DomainSummary {
+            halo_ratio_mean: d.halo_ratio_mean / k,
+            halo_ratio_max: d.halo_ratio_max / k,
+            bytes_sent_per_step: d.bytes_sent_per_step / k,
+            comm_seconds_per_step: d.comm_seconds_per_step / k,
+            sync_seconds_per_step: d.sync_seconds_per_step / k,
+            ..d
+        }
+    }
+}
+
+/// The open `timings.csv` (rank 0 only).
+#[derive(Debug)]
+pub struct TimingsCsv(CsvFile);
+
+impl TimingsCsv {
+    /// Creates the file and writes the header (`step`, the stage names,
+    /// `total`, the decomposition columns).
+    pub fn create(path: &Path) -> Result<Self, AppError> {
+        let mut f = CsvFile::create(path)?;
+        f.line(&format!(
+            "step,{},total,owned_min,owned_max,halo_ratio,halo_ratio_max,bytes_sent,comm_s_max,sync_s_max",
+            STAGES.join(",")
+        ))?;
+        Ok(Self(f))
+    }
+
+    /// One line for step `r`; `totals` gives the halo-ratio denominator.
+    pub fn step(&mut self, r: &StepReport, totals: &StageTotals) -> Result<(), AppError> {
+        let times: Vec<String> = r.times.0.iter().map(|s| format!("{s:.6e}")).collect();
+        let d = r.domain;
+        self.0.line_fmt(format_args!(
+            "{},{},{:.6e},{},{},{:.6e},{:.6e},{},{:.6e},{:.6e}",
+            r.step,
+            times.join(","),
+            r.times.total(),
+            d.owned_min,
+            d.owned_max,
+            totals.halo_ratio(r),
+            d.halo_ratio_max,
+            d.bytes_sent,
+            d.comm_seconds_max,
+            d.sync_seconds_max
+        ))
+    }
+
+    /// Writes out what is buffered (at the end of the loop).
+    pub fn flush(&mut self) -> Result<(), AppError> {
+        self.0.flush()
+    }
+
+    /// The last line, `mean_2..N`: the means over steps 2..N; then closes
+    /// the file.
+    pub fn finish(mut self, totals: &StageTotals) -> Result<(), AppError> {
+        let means: Vec<String> = totals
+            .stage_means()
+            .iter()
+            .map(|s| format!("{s:.6e}"))
+            .collect();
+        let dom = totals.domain();
+        self.0.line_fmt(format_args!(
+            "mean_2..N,{},{:.6e},{},{},{:.6e},{:.6e},{:.0},{:.6e},{:.6e}",
+            means.join(","),
+            totals.mean_step_s(),
+            dom.owned_min,
+            dom.owned_max,
+            dom.halo_ratio_mean,
+            dom.halo_ratio_max,
+            dom.bytes_sent_per_step,
+            dom.comm_seconds_per_step,
+            dom.sync_seconds_per_step
+        ))?;
+        self.0.flush()
+    }
+}
