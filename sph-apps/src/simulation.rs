@@ -476,8 +476,10 @@ mod tests {
         } else {
             cases::noh::INFO
         };
-        let mut config = HydroConfig::default();
-        info.scheme.apply(&mut config);
+        let config = HydroConfig {
+            scheme: info.scheme,
+            ..HydroConfig::default()
+        };
         match case {
             "sedov" => cases::sedov::setup(12, config),
             _ => cases::noh::setup(12, config),
