@@ -3,6 +3,9 @@
 //! step), merging partial sums, and the serial sparse exchange and
 //! all-to-all-v (the serial cost of a halo exchange).
 
+// criterion_group! defines a public function without docs.
+#![allow(missing_docs)]
+
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use sph_comm::{Communicator, ExactSum, SerialComm};
 use std::hint::black_box;

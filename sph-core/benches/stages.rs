@@ -2,6 +2,9 @@
 //! periodic box, ~100 neighbours): density + grad-h, IAD, momentum-energy
 //! (constant and per-particle viscosity), AV switches.
 
+// criterion_group! defines a public function without docs.
+#![allow(missing_docs)]
+
 use criterion::{criterion_group, criterion_main, Criterion};
 use sph_core::av_switch::{update_alpha, velocity_divergence, AvSwitchParams, FlowState};
 use sph_core::density::{density, Positions};

@@ -71,4 +71,16 @@ pub enum CoreError {
     /// Failure in the tree crate.
     #[error(transparent)]
     Tree(#[from] TreeError),
+    /// Bad self-gravity parameters (at set-up).
+    #[error("self-gravity: {0}")]
+    GravitySetup(#[source] sph_gravity::GravityError),
+    /// Self-gravity failed during a step.
+    #[error("step {step}: self-gravity: {source}")]
+    Gravity {
+        /// Step number.
+        step: u64,
+        /// The cause.
+        #[source]
+        source: sph_gravity::GravityError,
+    },
 }

@@ -384,7 +384,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 .gravity
                 .map(DistributedGravity::new)
                 .transpose()
-                .map_err(|e| CoreError::Invalid(format!("gravity: {e}")))?,
+                .map_err(CoreError::GravitySetup)?,
             field: GravityField::new(),
             gravity_tree: Octree::default(),
             step: 0,
@@ -807,7 +807,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 Some(&p.h[r.clone()]),
                 &mut self.field,
             )
-            .map_err(|e| CoreError::Invalid(format!("step {step}: gravity: {e}")))?;
+            .map_err(|source| CoreError::Gravity { step, source })?;
         p.phi[owned].copy_from_slice(&self.field.phi);
         Ok(stats)
     }

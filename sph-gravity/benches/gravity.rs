@@ -2,6 +2,9 @@
 //! quadrupoles) and the direct sum on 1e4 particles for comparison.
 //! The interaction counts of each tree evaluation are printed once.
 
+// criterion_group! defines a public function without docs.
+#![allow(missing_docs)]
+
 #[path = "../tests/common/mod.rs"]
 mod common;
 

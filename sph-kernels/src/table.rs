@@ -158,6 +158,7 @@ impl Tabulated {
             // gathers replace sixteen scalar loads; criterion stages_1e5,
             // 1 thread, scalar loads -> gathers: IAD 95 -> 71 ms, momentum
             // 191 -> 162 ms, density 102 -> 99 ms.
+            #[allow(unsafe_code)]
             unsafe {
                 let k = _mm512_cvttpd_epi32(__m512d::from(node));
                 let k2 = _mm256_add_epi32(k, k);

@@ -1,6 +1,9 @@
 //! Hot paths of the tree crate: keys + sort, tree build and neighbour
 //! search, on uniform random particles with about 100 neighbours each.
 
+// criterion_group! defines a public function without docs.
+#![allow(missing_docs)]
+
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
 use sph_tree::{
     apply_permutation, compute_keys, Boundary, BoundingBox, CompactNeighborList, Curve, KeySorter,
