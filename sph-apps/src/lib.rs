@@ -6,13 +6,13 @@
 //! use sph_core::HydroConfig;
 //! use sph_kernels::KernelChoice;
 //!
-//! let scene = cases::sedov::setup(20, HydroConfig::default()).unwrap();
-//! let kernel = KernelChoice::default().tabulate(20_000).unwrap();
-//! let mut sim = Simulation::new(scene, kernel, "sinc:6".into()).unwrap();
-//! let summary = sim
-//!     .run(Stop::Time(0.01), std::path::Path::new("out/sedov"), Progress::Quiet)
-//!     .unwrap();
+//! // The case applies its own scheme; `HydroConfig` carries the rest.
+//! let scene = cases::lookup("sedov")?.setup(20, HydroConfig::default())?;
+//! let kernel = KernelChoice::default().tabulate(20_000)?;
+//! let mut sim = Simulation::new(scene, kernel, "sinc:6".into())?;
+//! let summary = sim.run(Stop::Time(0.01), std::path::Path::new("out/sedov"), Progress::Quiet)?;
 //! println!("L1(rho) = {:?}", summary.l1);
+//! # Ok::<(), sph_apps::AppError>(())
 //! ```
 //!
 //! The reference solutions are usable on their own:

@@ -471,20 +471,9 @@ mod tests {
 
     /// A small case with its own scheme.
     fn scene(case: &str) -> Scene {
-        let info = if case == "sedov" {
-            cases::sedov::INFO
-        } else {
-            cases::noh::INFO
-        };
-        let config = HydroConfig {
-            scheme: info.scheme,
-            ..HydroConfig::default()
-        };
-        match case {
-            "sedov" => cases::sedov::setup(12, config),
-            _ => cases::noh::setup(12, config),
-        }
-        .expect("set-up")
+        cases::lookup(case)
+            .and_then(|c| c.setup(12, HydroConfig::default()))
+            .expect("set-up")
     }
 
     /// Runs `case` for 4 steps on `ranks` in-process ranks; rank 0's

@@ -1,5 +1,5 @@
 //! The analytic references (`sph_apps::reference`) against independent oracles: the Sedov
-//! profiles in `shared/reference/*.csv`, the numbers of VALIDATION.md, conservation integrals
+//! profiles in `tests/data/*.csv`, the numbers of VALIDATION.md, conservation integrals
 //! and the Rankine-Hugoniot jump conditions.
 
 use std::f64::consts::PI;
@@ -10,14 +10,8 @@ use proptest::prelude::*;
 use sph_apps::reference::{FlowState, Noh, ReferenceError, Sedov};
 
 const GAMMA: f64 = 5.0 / 3.0;
-const SEDOV_T005: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../shared/reference/sedov_t0.05.csv"
-);
-const SEDOV_T009: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../shared/reference/sedov_t0.09.csv"
-);
+const SEDOV_T005: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/sedov_t0.05.csv");
+const SEDOV_T009: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/sedov_t0.09.csv");
 
 /// The VALIDATION.md Sedov case: gamma 5/3, E = 1, rho0 = 1, 3-D, ambient labelled as the CSV.
 fn sedov() -> &'static Sedov {
@@ -52,8 +46,8 @@ struct Row([f64; 5]);
 fn read_oracle(path: &str) -> Vec<Row> {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| {
         panic!(
-            "cannot read the Sedov oracle {path}: {e}. It ships with the project in \
-             shared/reference/ (see shared/VALIDATION.md); this comparison must not be skipped"
+            "cannot read the Sedov oracle {path}: {e}. It ships with the crate in \
+             sph-apps/tests/data/ (see its README.md); this comparison must not be skipped"
         )
     });
     let rows: Vec<Row> = text
@@ -70,7 +64,7 @@ fn read_oracle(path: &str) -> Vec<Row> {
     assert_eq!(
         rows.len(),
         445,
-        "{path}: expected 445 rows (shared/reference/README.md)"
+        "{path}: expected 445 rows (tests/data/README.md)"
     );
     rows
 }

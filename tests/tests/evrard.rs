@@ -9,18 +9,16 @@
 //! (measured: E_kin -9.3%, E_int -3.6%, E_grav -3.4%; at 20^3 E_kin is
 //! 24% low), so this is the slowest validation test (~9 minutes on 2 cores).
 
-use sph_apps::cases::evrard;
+use sph_apps::cases;
 use sph_apps::simulation::Stop;
 use sph_core::HydroConfig;
 
 #[test]
 fn evrard_30_energies_match_reference() {
-    // No gravity parameters given: the case's own (softening 0.25).
-    let config = HydroConfig {
-        scheme: evrard::INFO.scheme,
-        ..Default::default()
-    };
-    let scene = evrard::setup(30, config).unwrap();
+    let scene = cases::lookup("evrard")
+        .unwrap()
+        .setup(30, HydroConfig::default())
+        .unwrap();
     let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("evrard30");
     let s = sph_validation::run(scene, Stop::Time(2.0), &out);
 

@@ -9,17 +9,16 @@
 //! rho0, the profile flat at 68-71 rho0 over 0.036-0.068. With the paper's
 //! constant alpha = 1 it is ~21 rho0.
 
-use sph_apps::cases::noh;
+use sph_apps::cases;
 use sph_apps::simulation::Stop;
 use sph_core::HydroConfig;
 
 #[test]
 fn noh_30_equivalent_reaches_the_plateau_and_conserves_energy() {
-    let config = HydroConfig {
-        scheme: noh::INFO.scheme,
-        ..HydroConfig::default()
-    };
-    let scene = noh::setup(37, config).unwrap();
+    let scene = cases::lookup("noh")
+        .unwrap()
+        .setup(37, HydroConfig::default())
+        .unwrap();
     let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("noh37");
     let s = sph_validation::run(scene, Stop::Time(0.3), &out);
     let target = s.plateau_density_ref.unwrap();

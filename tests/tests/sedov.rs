@@ -1,13 +1,16 @@
 //! Sedov-Taylor blast wave, 30^3 particles to t = 0.05, against the
 //! similarity solution.
 
-use sph_apps::cases::sedov;
+use sph_apps::cases;
 use sph_apps::simulation::Stop;
 use sph_core::HydroConfig;
 
 #[test]
 fn sedov_30_cubed_matches_similarity_solution() {
-    let scene = sedov::setup(30, HydroConfig::default()).unwrap();
+    let scene = cases::lookup("sedov")
+        .unwrap()
+        .setup(30, HydroConfig::default())
+        .unwrap();
     let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("sedov30");
     let s = sph_validation::run(scene, Stop::Time(0.05), &out);
     let r = s.shock_radius.unwrap();

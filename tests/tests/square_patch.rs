@@ -1,13 +1,16 @@
 //! Rotating square patch, 20^3 particles for 300 steps: angular momentum,
 //! linear momentum and no tensile clumping.
 
-use sph_apps::cases::square_patch;
+use sph_apps::cases::{self, square_patch};
 use sph_apps::simulation::Stop;
 use sph_core::HydroConfig;
 
 #[test]
 fn square_patch_conserves_angular_momentum_without_clumping() {
-    let scene = square_patch::setup(20, HydroConfig::default()).unwrap();
+    let scene = cases::lookup("square-patch")
+        .unwrap()
+        .setup(20, HydroConfig::default())
+        .unwrap();
     let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("square_patch20");
     let s = sph_validation::run(scene, Stop::Steps(300), &out);
     let [l0, l1] = s.angular_momentum_z;

@@ -1,11 +1,13 @@
 //! `sphexa`: run the SPH-EXA test cases from the command line.
 
+use clap::builder::{PossibleValue, PossibleValuesParser};
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use sph_apps::cases::{self, CASES};
+use sph_apps::cases::{self, Scheme, SchemeOverrides};
 use sph_apps::simulation::{Progress, Stop};
 use sph_apps::{AppError, Simulation};
 use sph_comm::Communicator;
-use sph_core::{Gradients, HydroConfig, Scheme};
+use sph_core::PRESETS;
+use sph_core::{Gradients, HydroConfig};
 use sph_kernels::{KernelChoice, Tabulated};
 use sph_tree::Curve;
 use std::path::PathBuf;
@@ -25,7 +27,7 @@ enum Command {
     /// Run a test case and write its outputs (conserved.csv, timings.csv,
     /// profile.csv, summary.json) into --out.
     Run(Box<RunArgs>),
-    /// List the test cases.
+    /// List the test cases with their default size, end time and scheme.
     Cases,
 }
 
@@ -53,75 +55,95 @@ enum CurveArg {
     Morton,
 }
 
+/// Most worker threads per rank.
+const MAX_THREADS: i64 = 1 << 16;
+
+/// Smallest and largest particles per side.
+const SIDE_RANGE: (usize, usize) = (4, 1000);
+
 #[derive(Args, Debug)]
 struct RunArgs {
-    /// Test case (see `sphexa cases`).
+    /// Test case (`sphexa cases` lists each with its defaults).
+    #[arg(value_parser = case_names())]
     case: String,
-    /// Particles per side of the initial lattice (default: the case's).
-    #[arg(short = 'n', long = "side")]
+    /// Particles per side of the initial lattice, 4 to 1000 (default: the
+    /// case's, see `sphexa cases`).
+    #[arg(short = 'n', long = "side", value_name = "N", allow_negative_numbers = true,
+          value_parser = parse_side)]
     side: Option<usize>,
-    /// Number of steps to run.
-    #[arg(long, conflicts_with = "end_time")]
+    /// Number of steps to run, at least 1 (default: run to the end time).
+    #[arg(long, conflicts_with = "end_time", allow_negative_numbers = true,
+          value_parser = parse_steps)]
     steps: Option<u64>,
-    /// Simulated time to reach (default: the case's).
-    #[arg(long = "end-time")]
+    /// Simulated time to reach, a positive number (default: the case's, see
+    /// `sphexa cases`).
+    #[arg(long = "end-time", value_name = "T", allow_negative_numbers = true,
+          value_parser = parse_positive)]
     end_time: Option<f64>,
-    /// Output folder (default: out/CASE).
-    #[arg(long)]
+    /// Output folder, created if needed (default: out/CASE).
+    #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
+    /// Worker threads per rank, at least 1 (default: all cores).
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = parse_threads)]
     threads: Option<usize>,
-    /// Kernel: `sinc`, `sinc:N` (N >= 1, default 6), `m4`, `wendland-c2`, `wendland-c4`, `wendland-c6`.
-    #[arg(long, default_value = "sinc:6")]
-    kernel: String,
-    /// Target neighbour count, self included.
-    #[arg(long, default_value_t = 100)]
+    /// Kernel: `sinc` (= sinc:6), `sinc:N` (1 <= N <= 1000), `m4`, `wendland-c2`,
+    /// `wendland-c4`, `wendland-c6`.
+    #[arg(long, default_value = "sinc:6", value_parser = parse_kernel)]
+    kernel: KernelChoice,
+    /// Target neighbour count, self included: 8 to --ngmax.
+    #[arg(long, default_value_t = 100, allow_negative_numbers = true,
+          value_parser = parse_count)]
     ng0: usize,
-    /// Largest accepted neighbour count before h is iterated.
-    #[arg(long, default_value_t = 150)]
+    /// Largest accepted neighbour count before h is iterated: --ng0 or more.
+    #[arg(long, default_value_t = 150, allow_negative_numbers = true,
+          value_parser = parse_count)]
     ngmax: usize,
-    /// Scheme preset to start from (default: the case's own): `paper`
-    /// (the seed paper's eqs. 1-5: IAD, grad-h, alpha = 1), `noh`, `evrard`
-    /// (see `sphexa cases`); the options below override it one by one.
+    /// Scheme preset to start from instead of the case's own: `paper`
+    /// (the seed paper's eqs. 1-5: IAD, grad-h, constant alpha = 1), `noh`
+    /// (kernel gradients, grad-h, switches up to alpha 0.7), `evrard`
+    /// (kernel gradients, no grad-h, switches up to alpha 0.5). The options
+    /// below override it one by one.
     #[arg(long, value_name = "NAME")]
     scheme: Option<String>,
-    /// Gradient operator (default: the scheme's; iad for `paper`).
+    /// Gradient operator (default: the case's, see `sphexa cases`).
     #[arg(long, value_enum)]
     gradients: Option<GradientArg>,
     /// Space-filling curve for sorting particles.
     #[arg(long, value_enum, default_value = "hilbert")]
     curve: CurveArg,
-    /// Artificial viscosity strength alpha, the maximum with switches
-    /// (default: the case's; 1 for all but evrard, 0.5).
-    #[arg(long)]
+    /// Artificial viscosity strength alpha, the maximum with switches; a
+    /// number >= 0 (default: the case's, see `sphexa cases`).
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_non_negative)]
     alpha: Option<f64>,
-    /// Courant factor.
-    #[arg(long, default_value_t = 0.2)]
+    /// Courant factor, in (0, 1].
+    #[arg(long, default_value_t = 0.2, allow_negative_numbers = true,
+          value_parser = parse_courant)]
     courant: f64,
-    /// The grad-h correction Omega (default: the case's; on for all but
-    /// evrard).
-    #[arg(long, value_name = "on|off")]
+    /// The grad-h correction Omega (default: the case's, see `sphexa cases`).
+    #[arg(long, value_enum)]
     grad_h: Option<Switch>,
     /// Leave out the grad-h correction (Omega = 1): `--grad-h off`.
     #[arg(long, conflicts_with = "grad_h")]
     no_grad_h: bool,
     /// Time-dependent viscosity switches: each particle's alpha rises to
     /// --alpha in shocks and decays to 0.05 elsewhere (SPH-EXA's "ve"
-    /// switches). Default: the case's; on for evrard only.
-    #[arg(long, value_name = "on|off")]
+    /// switches). Default: the case's, see `sphexa cases`.
+    #[arg(long, value_enum)]
     av_switches: Option<Switch>,
-    /// Artificial conductivity of internal energy alpha_u (0 = off, the
-    /// paper's scheme; ~1 smooths wall heating at shocks and walls).
-    /// Default: the scheme's (off in every preset).
-    #[arg(long)]
+    /// Artificial conductivity of internal energy alpha_u, a number >= 0
+    /// (0 = off; ~1 smooths wall heating at shocks and walls). Default: the
+    /// scheme's (off in every preset).
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_non_negative)]
     conductivity: Option<f64>,
-    /// Self-gravity: opening angle theta of the tree (cases with gravity).
-    #[arg(long, default_value_t = 0.5)]
+    /// Self-gravity: opening angle theta of the tree, a positive number
+    /// (cases with gravity only).
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true,
+          value_parser = parse_positive)]
     theta: f64,
-    /// Self-gravity: pairs are softened within SOFTENING * (h_i + h_j)
-    /// (1 = SPH-EXA's choice; default: the case's, 0.25 for evrard).
-    #[arg(long)]
+    /// Self-gravity: pairs are softened within SOFTENING * (h_i + h_j), a
+    /// number >= 0 (1 = SPH-EXA's choice; default: the case's, see
+    /// `sphexa cases`; cases with gravity only).
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_non_negative)]
     softening: Option<f64>,
     /// Also write the final state of every particle (particles.csv, sorted
     /// by id, exact decimal round-trip of every value).
@@ -132,20 +154,83 @@ struct RunArgs {
     quiet: bool,
 }
 
+/// The registered cases as the allowed values of the case argument (with
+/// their descriptions in `sphexa run --help`).
+fn case_names() -> PossibleValuesParser {
+    PossibleValuesParser::new(
+        cases::registry()
+            .iter()
+            .map(|c| PossibleValue::new(c.name()).help(c.description())),
+    )
+}
+
+fn parse_side(s: &str) -> Result<usize, String> {
+    let (lo, hi) = SIDE_RANGE;
+    match s.trim().parse::<i64>() {
+        Ok(n) if (lo as i64..=hi as i64).contains(&n) => Ok(n as usize),
+        _ => Err(format!(
+            "particles per side must be a whole number from {lo} to {hi}"
+        )),
+    }
+}
+
+fn parse_steps(s: &str) -> Result<u64, String> {
+    match s.trim().parse::<i64>() {
+        Ok(n) if n >= 1 => Ok(n as u64),
+        _ => Err("the number of steps must be a whole number, at least 1".into()),
+    }
+}
+
+fn parse_threads(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<i64>() {
+        Ok(n) if (1..=MAX_THREADS).contains(&n) => Ok(n as usize),
+        _ => Err(format!(
+            "the thread count must be a whole number, at least 1 (at most {MAX_THREADS})"
+        )),
+    }
+}
+
+fn parse_count(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<i64>() {
+        Ok(n) if n >= 1 => Ok(n as usize),
+        _ => Err("a neighbour count must be a whole number, at least 1".into()),
+    }
+}
+
+/// A finite number within `ok`, or `allowed` as the error.
+fn parse_number(s: &str, ok: impl Fn(f64) -> bool, allowed: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && ok(x) => Ok(x),
+        _ => Err(allowed.into()),
+    }
+}
+
+fn parse_positive(s: &str) -> Result<f64, String> {
+    parse_number(s, |x| x > 0.0, "a positive finite number is required")
+}
+
+fn parse_non_negative(s: &str) -> Result<f64, String> {
+    parse_number(s, |x| x >= 0.0, "a finite number >= 0 is required")
+}
+
+fn parse_courant(s: &str) -> Result<f64, String> {
+    parse_number(
+        s,
+        |x| x > 0.0 && x <= 1.0,
+        "the Courant factor must be a number in (0, 1]",
+    )
+}
+
+fn parse_kernel(s: &str) -> Result<KernelChoice, String> {
+    s.parse()
+        .map_err(|e: sph_kernels::KernelError| e.to_string())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Cases => {
-            println!(
-                "{:<14} {:>6} {:>9}  description",
-                "case", "side", "end time"
-            );
-            for c in CASES {
-                println!(
-                    "{:<14} {:>6} {:>9}  {}",
-                    c.name, c.default_side, c.default_end_time, c.description
-                );
-            }
+            list_cases();
             ExitCode::SUCCESS
         }
         Command::Run(args) => match run(*args) {
@@ -158,58 +243,112 @@ fn main() -> ExitCode {
     }
 }
 
+/// `sphexa cases`: one line per case, then its default scheme as the
+/// options that would select it.
+fn list_cases() {
+    println!(
+        "{:<14} {:>6} {:>9}  description",
+        "case", "side", "end time"
+    );
+    for c in cases::registry() {
+        println!(
+            "{:<14} {:>6} {:>9}  {}",
+            c.name(),
+            c.default_side(),
+            c.default_end_time(),
+            c.description()
+        );
+        println!(
+            "{:<14} scheme: {}",
+            "",
+            scheme_options(&c.default_scheme(), c.physics().softening)
+        );
+    }
+}
+
+/// A scheme (and the case's softening) written as the `sphexa run`
+/// options that select it.
+fn scheme_options(s: &Scheme, softening: Option<f64>) -> String {
+    let on = |b: bool| if b { "on" } else { "off" };
+    let gradients = match s.gradients {
+        Gradients::Iad => "iad",
+        Gradients::Kernel => "kernel",
+    };
+    let mut text = format!(
+        "--gradients {gradients} --grad-h {} --alpha {} --av-switches {}",
+        on(s.grad_h),
+        s.alpha(),
+        on(s.switches().is_some())
+    );
+    if let Some(c) = s.conductivity {
+        text += &format!(" --conductivity {c}");
+    }
+    if let Some(soft) = softening {
+        text += &format!(" --softening {soft} (self-gravity)");
+    }
+    text
+}
+
+/// What the command line changes in the case's scheme.
+fn scheme_overrides(a: &RunArgs) -> Result<SchemeOverrides, AppError> {
+    let preset = match &a.scheme {
+        Some(name) => Some(Scheme::preset(name).map_err(|_| {
+            let names: Vec<String> = PRESETS
+                .iter()
+                .map(|(n, _, what)| format!("{n} ({what})"))
+                .collect();
+            AppError::Usage(format!(
+                "--scheme {name}: unknown scheme; presets: {}",
+                names.join("; ")
+            ))
+        })?),
+        None => None,
+    };
+    Ok(SchemeOverrides {
+        preset,
+        gradients: a.gradients.map(|g| match g {
+            GradientArg::Iad => Gradients::Iad,
+            GradientArg::Kernel => Gradients::Kernel,
+        }),
+        grad_h: if a.no_grad_h {
+            Some(false)
+        } else {
+            a.grad_h.map(|g| g == Switch::On)
+        },
+        alpha: a.alpha,
+        av_switches: a.av_switches.map(|s| s == Switch::On),
+        conductivity: a.conductivity,
+        softening: a.softening,
+    })
+}
+
 fn run(a: RunArgs) -> Result<(), AppError> {
-    let info = cases::find(&a.case).ok_or_else(|| {
-        let names: Vec<&str> = CASES.iter().map(|c| c.name).collect();
-        AppError::Usage(format!(
-            "unknown case '{}'; available: {}",
-            a.case,
-            names.join(", ")
-        ))
-    })?;
-    let side = a.side.unwrap_or(info.default_side);
-    if side < 4 {
-        return Err(AppError::Usage(format!(
-            "--side {side} is too small: at least 4 particles per side are needed"
-        )));
-    }
-    if side > 1000 {
-        return Err(AppError::Usage(format!(
-            "--side {side} is too large (at most 1000)"
-        )));
-    }
-    if let Some(t) = a.end_time {
-        if !(t > 0.0 && t.is_finite()) {
-            return Err(AppError::Usage(format!(
-                "--end-time {t} must be a positive number"
-            )));
-        }
-    }
-    if a.steps == Some(0) {
-        return Err(AppError::Usage("--steps must be at least 1".into()));
-    }
+    let case = cases::lookup(&a.case)?;
+    let side = a.side.unwrap_or(case.default_side());
     if a.ng0 < 8 || a.ng0 > a.ngmax {
         return Err(AppError::Usage(format!(
             "--ng0 {} must be at least 8 and at most --ngmax {}",
             a.ng0, a.ngmax
         )));
     }
-    if !(a.courant > 0.0 && a.courant <= 1.0) {
-        return Err(AppError::Usage(format!(
-            "--courant {} must be in (0, 1]",
-            a.courant
-        )));
-    }
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out").join(case.name()));
+    // Before any work: a folder that cannot be made is a usage error.
+    std::fs::create_dir_all(&out).map_err(|e| {
+        AppError::Usage(format!(
+            "--out {}: cannot create this folder ({e}); give a folder that can be created and written",
+            out.display()
+        ))
+    })?;
     if let Some(t) = a.threads {
-        if t == 0 {
-            return Err(AppError::Usage("--threads must be at least 1".into()));
-        }
         rayon::ThreadPoolBuilder::new()
             .num_threads(t)
             .build_global()
             .map_err(|e| AppError::Usage(format!("cannot start {t} threads: {e}")))?;
     }
-    let kernel_choice: KernelChoice = a.kernel.parse()?;
+    let kernel_choice = a.kernel;
     let kernel: Tabulated = kernel_choice.tabulate(Tabulated::DEFAULT_POINTS)?;
 
     let mut config = HydroConfig {
@@ -217,82 +356,24 @@ fn run(a: RunArgs) -> Result<(), AppError> {
             CurveArg::Hilbert => Curve::Hilbert,
             CurveArg::Morton => Curve::Morton,
         },
+        // Kept only by cases with self-gravity.
+        gravity: Some(sph_gravity::GravityParams {
+            theta: a.theta,
+            ..Default::default()
+        }),
         ..HydroConfig::default()
     };
     config.neighbors.ng0 = a.ng0;
     config.neighbors.ngmax = a.ngmax;
     config.timestep.k_courant = a.courant;
-    if !(a.theta > 0.0 && a.theta.is_finite()) {
-        return Err(AppError::Usage(format!(
-            "--theta {} must be positive",
-            a.theta
-        )));
-    }
-    // The case's scheme (or a named preset), then what the command line
-    // overrides.
-    let mut scheme = match &a.scheme {
-        Some(name) => Scheme::preset(name)?,
-        None => info.scheme,
-    };
-    if let Some(c) = a.conductivity {
-        if !(c >= 0.0 && c.is_finite()) {
-            return Err(AppError::Usage(format!(
-                "--conductivity {c} must be a finite number >= 0 (0 = off)"
-            )));
-        }
-        scheme.conductivity = (c > 0.0).then_some(c);
-    }
-    if let Some(g) = a.gradients {
-        scheme.gradients = match g {
-            GradientArg::Iad => Gradients::Iad,
-            GradientArg::Kernel => Gradients::Kernel,
-        };
-    }
-    if let Some(alpha) = a.alpha {
-        if !(alpha >= 0.0 && alpha.is_finite()) {
-            return Err(AppError::Usage(format!("--alpha {alpha} must be >= 0")));
-        }
-        scheme.set_alpha(alpha);
-    }
-    if let Some(g) = a.grad_h {
-        scheme.grad_h = g == Switch::On;
-    }
-    if a.no_grad_h {
-        scheme.grad_h = false;
-    }
-    if let Some(s) = a.av_switches {
-        scheme.set_switches(s == Switch::On);
-    }
-    let softening = a.softening.unwrap_or(info.softening);
-    if !(softening >= 0.0 && softening.is_finite()) {
-        return Err(AppError::Usage(format!(
-            "--softening {softening} must be >= 0"
-        )));
-    }
-    scheme.validate()?;
-    config.scheme = scheme;
-    // Cases without self-gravity drop these parameters.
-    config.gravity = Some(sph_gravity::GravityParams {
-        theta: a.theta,
-        softening,
-        ..Default::default()
-    });
-
-    let scene = match info.name {
-        "sedov" => cases::sedov::setup(side, config)?,
-        "noh" => cases::noh::setup(side, config)?,
-        "square-patch" => cases::square_patch::setup(side, config)?,
-        "evrard" => cases::evrard::setup(side, config)?,
-        other => return Err(AppError::Usage(format!("case {other} has no set-up"))),
-    };
+    // The case applies its own scheme with what the command line overrides.
+    let scene = case.setup_with(side, config, &scheme_overrides(&a)?)?;
+    scene.config.scheme.validate()?;
     let stop = match (a.steps, a.end_time) {
         (Some(s), _) => Stop::Steps(s),
         (None, Some(t)) => Stop::Time(t),
-        (None, None) => Stop::Time(info.default_end_time),
+        (None, None) => Stop::Time(case.default_end_time()),
     };
-    let out = a
-        .out
-        .unwrap_or_else(|| PathBuf::from("out").join(info.name));
     #[cfg(feature = "mpi")]
     let comm = sph_comm::MpiComm::init()?;
     #[cfg(not(feature = "mpi"))]
@@ -303,7 +384,7 @@ fn run(a: RunArgs) -> Result<(), AppError> {
     if !a.quiet && root {
         eprintln!(
             "sphexa: {} with {n} particles, kernel {kernel_choice}, {ranks} rank(s) x {} threads, output in {}",
-            info.name,
+            case.name(),
             rayon::current_num_threads(),
             out.display()
         );

@@ -2,30 +2,24 @@
 //! falls in under its own gravity, bounces and settles; compared with the
 //! energies of a 1-D Lagrangian reference.
 
-use super::{cube_lattice, initial_h, CaseInfo, EnergyPoint, Scene};
+use super::{cube_lattice, field_set, initial_h, Case, EnergyPoint, InitialState, Physics, Scheme};
 use crate::AppError;
-use sph_core::{Eos, FieldSet, HydroConfig, Particles};
+use sph_core::{Eos, HydroConfig, Particles};
 use sph_tree::{Boundary, BoundingBox};
 
-/// Listing entry.
-pub const INFO: CaseInfo = CaseInfo {
-    name: "evrard",
-    description: "Evrard collapse of a self-gravitating gas sphere vs reference energies",
-    default_side: 30,
-    default_end_time: 2.0,
-    scheme: SCHEME,
-    softening: 0.25,
-};
+/// The case (registered as `evrard`).
+#[derive(Debug, Clone, Copy)]
+pub struct EvrardCollapse;
 
 /// Kernel gradients without grad-h terms, viscosity switches up to 0.5 and
-/// pairs softened within `(h_i + h_j) / 4` (`INFO.softening`). With the paper's scheme (IAD,
+/// pairs softened within `(h_i + h_j) / 4`. With the paper's scheme (IAD,
 /// grad-h, alpha = 1, softening `h_i + h_j`) the collapse lags at these
 /// resolutions: at 20^3, t = 0.8, E_kin is 41% low; the viscosity damps
 /// the smooth infall and the h-dependent softening costs 3.5% of the
 /// energy by t = 0.8. With this scheme, 30^3 (14328 particles) is within
 /// 10% of the reference at t = 0.8 and t = 2.0 and conserves energy to
 /// 5e-4 through t = 1.5.
-pub const SCHEME: super::Scheme = super::Scheme::EVRARD;
+pub const SCHEME: Scheme = Scheme::EVRARD;
 
 /// Adiabatic index.
 pub const GAMMA: f64 = 5.0 / 3.0;
@@ -61,50 +55,66 @@ pub const ENERGIES: [EnergyPoint; 4] = [
     },
 ];
 
-/// Builds the scene: the unit sphere cut from a `side^3` lattice of the
-/// cube `[-1, 1]^3`, stretched radially (`r -> r^(3/2)`) so that the
-/// enclosed mass goes as `r^2`, i.e. `rho = 1 / (2 pi r)`; equal masses
-/// `1/N`, at rest, `u = 0.05`; h from the local density.
-pub fn setup(side: usize, mut config: HydroConfig) -> Result<Scene, AppError> {
-    let pts: Vec<[f64; 3]> = cube_lattice(side, -1.0, 2.0)
-        .filter(|q| q[0] * q[0] + q[1] * q[1] + q[2] * q[2] < 1.0)
-        .collect();
-    let n = pts.len();
-    let mut p = Particles::new(
-        n,
-        FieldSet {
-            iad: config.scheme.gradients == sph_core::Gradients::Iad,
-            grad_h: config.scheme.grad_h,
-            gravity: true,
-        },
-    );
-    let m = 1.0 / n as f64;
-    for (i, q) in pts.iter().enumerate() {
-        let r = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
-        let s = r.sqrt(); // r^(3/2) / r
-        (p.x[i], p.y[i], p.z[i]) = (q[0] * s, q[1] * s, q[2] * s);
-        let r_new = r * s;
-        // Number density N rho / M = N / (2 pi r): a uniform set of that
-        // density in the unit volume has 2 pi r / N per particle.
-        let volume_per = 2.0 * std::f64::consts::PI * r_new.max(0.5 / side as f64) / n as f64;
-        p.h[i] = initial_h(config.neighbors.ng0, volume_per, 1);
-        p.m[i] = m;
-        p.u[i] = U0;
+impl Case for EvrardCollapse {
+    fn name(&self) -> &'static str {
+        "evrard"
     }
-    config.eos = Eos::IdealGas { gamma: GAMMA };
-    // Self-gravity always; the case's softening unless the caller set
-    // gravity parameters.
-    config.gravity = Some(config.gravity.unwrap_or(sph_gravity::GravityParams {
-        softening: INFO.softening,
-        ..Default::default()
-    }));
-    Ok(Scene {
-        case: INFO.name,
-        particles: p,
-        bbox: BoundingBox::cube(-1.0, 1.0, Boundary::Open)?,
-        config,
-        dt0: 1e-4,
-        reference: None,
-        energies: Some(&ENERGIES),
-    })
+
+    fn description(&self) -> &'static str {
+        "Evrard collapse of a self-gravitating gas sphere vs reference energies"
+    }
+
+    fn default_side(&self) -> usize {
+        30
+    }
+
+    fn default_end_time(&self) -> f64 {
+        2.0
+    }
+
+    fn default_scheme(&self) -> Scheme {
+        SCHEME
+    }
+
+    /// An ideal gas with [`GAMMA`], self-gravity softened within `(h_i + h_j) / 4`.
+    fn physics(&self) -> Physics {
+        Physics {
+            eos: Eos::IdealGas { gamma: GAMMA },
+            softening: Some(0.25),
+        }
+    }
+
+    /// The unit sphere cut from a `side^3` lattice of the cube
+    /// `[-1, 1]^3`, stretched radially (`r -> r^(3/2)`) so that the
+    /// enclosed mass goes as `r^2`, i.e. `rho = 1 / (2 pi r)`; equal masses
+    /// `1/N`, at rest, `u = 0.05`; h from the local density.
+    fn initial_state(&self, side: usize, config: &HydroConfig) -> Result<InitialState, AppError> {
+        let pts: Vec<[f64; 3]> = cube_lattice(side, -1.0, 2.0)
+            .filter(|q| q[0] * q[0] + q[1] * q[1] + q[2] * q[2] < 1.0)
+            .collect();
+        let n = pts.len();
+        let mut p = Particles::new(n, field_set(config));
+        let m = 1.0 / n as f64;
+        for (i, q) in pts.iter().enumerate() {
+            let r = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
+            let s = r.sqrt(); // r^(3/2) / r
+            (p.x[i], p.y[i], p.z[i]) = (q[0] * s, q[1] * s, q[2] * s);
+            let r_new = r * s;
+            // Number density N rho / M = N / (2 pi r): a uniform set of that
+            // density in the unit volume has 2 pi r / N per particle.
+            let volume_per = 2.0 * std::f64::consts::PI * r_new.max(0.5 / side as f64) / n as f64;
+            p.h[i] = initial_h(config.neighbors.ng0, volume_per, 1);
+            p.m[i] = m;
+            p.u[i] = U0;
+        }
+        Ok(InitialState {
+            particles: p,
+            bbox: BoundingBox::cube(-1.0, 1.0, Boundary::Open)?,
+            dt0: 1e-4,
+        })
+    }
+
+    fn energies(&self) -> Option<&'static [EnergyPoint]> {
+        Some(&ENERGIES)
+    }
 }

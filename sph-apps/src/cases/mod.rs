@@ -1,41 +1,179 @@
-//! The test cases: initial conditions, the physics each needs, and its
+//! The test cases: initial conditions, the scheme each needs, and its
 //! reference solution.
+//!
+//! A case is a type implementing [`Case`], in its own module, listed once
+//! in [`CASES`]: the command line (`sphexa cases`, `sphexa run CASE`), its
+//! help text, its unknown-case error and the tests all read that list.
+//! Adding a case is one new file here and one line in [`CASES`] (plus its
+//! `pub mod` line).
+//!
+//! ```
+//! use sph_apps::cases;
+//! use sph_core::HydroConfig;
+//!
+//! let case = cases::lookup("sedov").unwrap();
+//! // The case's scheme is applied by `setup` itself.
+//! let scene = case.setup(8, HydroConfig::default()).unwrap();
+//! assert_eq!(scene.particles.len(), 8 * 8 * 8);
+//! assert!(cases::lookup("sedov-taylor").is_err());
+//! ```
 
 use crate::reference::{FlowState, Noh, Sedov};
-use sph_core::{HydroConfig, Particles};
+use crate::AppError;
+use sph_core::{FieldSet, HydroConfig, Particles};
 use sph_tree::BoundingBox;
 
 pub mod evrard;
 pub mod noh;
+mod scheme;
 pub mod sedov;
 pub mod square_patch;
 
-/// A case's name and one-line description, for `sphexa cases`.
-#[derive(Debug, Clone, Copy)]
-pub struct CaseInfo {
-    /// Name on the command line.
-    pub name: &'static str,
-    /// One line for listings.
-    pub description: &'static str,
-    /// Default particles per side.
-    pub default_side: usize,
-    /// Default end time.
-    pub default_end_time: f64,
-    /// The scheme the case runs with unless told otherwise.
-    pub scheme: Scheme,
-    /// Self-gravity softening scale the case runs with (pairs softened
-    /// within `softening * (h_i + h_j)`; cases with self-gravity).
-    pub softening: f64,
+pub use scheme::{Physics, Scheme, SchemeOverrides};
+
+/// Every case, in listing order: the only list of cases.
+pub static CASES: &[&dyn Case] = &[
+    &sedov::SedovBlast,
+    &noh::NohImplosion,
+    &square_patch::SquarePatch,
+    &evrard::EvrardCollapse,
+];
+
+/// Every case, in listing order (the same as [`CASES`]).
+pub fn registry() -> &'static [&'static dyn Case] {
+    CASES
 }
 
-pub use sph_core::Scheme;
-
-/// Every case, in listing order.
-pub const CASES: [CaseInfo; 4] = [sedov::INFO, noh::INFO, square_patch::INFO, evrard::INFO];
+/// The names of all cases, in listing order.
+pub fn names() -> Vec<&'static str> {
+    CASES.iter().map(|c| c.name()).collect()
+}
 
 /// Looks a case up by name.
-pub fn find(name: &str) -> Option<&'static CaseInfo> {
-    CASES.iter().find(|c| c.name == name)
+pub fn find(name: &str) -> Option<&'static dyn Case> {
+    CASES.iter().copied().find(|c| c.name() == name)
+}
+
+/// Looks a case up by name; an unknown name is a usage error that names it
+/// and lists the cases there are.
+pub fn lookup(name: &str) -> Result<&'static dyn Case, AppError> {
+    find(name).ok_or_else(|| {
+        AppError::Usage(format!(
+            "unknown case '{name}'; available: {}",
+            names().join(", ")
+        ))
+    })
+}
+
+/// A test case: what it is called, what it runs by default, how it starts
+/// and what it is compared with.
+///
+/// Implementors write the listing methods, [`default_scheme`],
+/// [`initial_state`] and, where the case has them, [`reference`] and
+/// [`energies`]. Callers use [`setup`] or [`setup_with`], which apply the
+/// case's scheme (with the caller's overrides) before the set-up sees the
+/// configuration, so no caller can forget it; implementors do not override
+/// these two.
+///
+/// [`default_scheme`]: Case::default_scheme
+/// [`initial_state`]: Case::initial_state
+/// [`reference`]: Case::reference
+/// [`energies`]: Case::energies
+/// [`setup`]: Case::setup
+/// [`setup_with`]: Case::setup_with
+pub trait Case: Sync + std::fmt::Debug {
+    /// Name on the command line (lower case, words joined by `-`).
+    fn name(&self) -> &'static str;
+
+    /// One line for listings.
+    fn description(&self) -> &'static str;
+
+    /// Default particles per side of the initial lattice.
+    fn default_side(&self) -> usize;
+
+    /// Default end time.
+    fn default_end_time(&self) -> f64;
+
+    /// The scheme the case runs with unless overridden.
+    fn default_scheme(&self) -> Scheme;
+
+    /// The equation of state and self-gravity of the case (default: an
+    /// ideal gas with gamma = 5/3, no self-gravity).
+    fn physics(&self) -> Physics {
+        Physics::IDEAL_GAS
+    }
+
+    /// The initial particles, box and first time step for `side` particles
+    /// per side. `config` already carries the scheme (see [`Case::setup`]);
+    /// use [`field_set`] for the particle fields it needs.
+    fn initial_state(&self, side: usize, config: &HydroConfig) -> Result<InitialState, AppError>;
+
+    /// The analytic solution to compare `initial` with, if any.
+    fn reference(
+        &self,
+        side: usize,
+        initial: &InitialState,
+    ) -> Result<Option<Reference>, AppError> {
+        let _ = (side, initial);
+        Ok(None)
+    }
+
+    /// Reference energies over time, if any.
+    fn energies(&self) -> Option<&'static [EnergyPoint]> {
+        None
+    }
+
+    /// The scene for `side` particles per side with the case's own scheme
+    /// written over `config` (whose other settings, e.g. neighbour counts,
+    /// Courant factor, conductivity, curve, gravity's opening angle, are
+    /// kept).
+    fn setup(&self, side: usize, config: HydroConfig) -> Result<Scene, AppError> {
+        self.setup_with(side, config, &SchemeOverrides::default())
+    }
+
+    /// As [`Case::setup`], with the case's scheme changed by `overrides`.
+    fn setup_with(
+        &self,
+        side: usize,
+        mut config: HydroConfig,
+        overrides: &SchemeOverrides,
+    ) -> Result<Scene, AppError> {
+        if side == 0 {
+            return Err(AppError::Usage(format!(
+                "case {}: 0 particles per side; at least 1 is needed",
+                self.name()
+            )));
+        }
+        overrides.apply(self.default_scheme(), self.physics(), &mut config);
+        let initial = self.initial_state(side, &config)?;
+        let reference = self.reference(side, &initial)?;
+        Ok(Scene {
+            case: self.name(),
+            particles: initial.particles,
+            bbox: initial.bbox,
+            config,
+            dt0: initial.dt0,
+            reference,
+            energies: self.energies(),
+        })
+    }
+}
+
+/// What a case starts from, before the scheme and references are attached.
+#[derive(Debug, Clone)]
+pub struct InitialState {
+    /// Initial particles.
+    pub particles: Particles,
+    /// Simulation box.
+    pub bbox: BoundingBox,
+    /// First time step (the integrator's `dt_{-1}`).
+    pub dt0: f64,
+}
+
+/// The optional particle fields `config` needs (IAD matrix, grad-h factor,
+/// gravitational potential).
+pub fn field_set(config: &HydroConfig) -> FieldSet {
+    config.fields()
 }
 
 /// Reference energies of a case at one time.
@@ -111,4 +249,82 @@ pub fn cube_lattice(n: usize, lo: f64, len: f64) -> impl Iterator<Item = [f64; 3
 /// `n / volume`: `h = 1/2 (3/(4 pi) ng0 V / N)^(1/3)`.
 pub fn initial_h(ng0: usize, volume: f64, n: usize) -> f64 {
     0.5 * (3.0 / (4.0 * std::f64::consts::PI) * ng0 as f64 * volume / n as f64).cbrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_are_unique_and_command_line_friendly() {
+        let names = names();
+        for (i, n) in names.iter().enumerate() {
+            assert!(!names[..i].contains(n), "case {n} listed twice");
+            assert!(
+                !n.is_empty()
+                    && n.chars()
+                        .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-'),
+                "case name {n:?}"
+            );
+            assert_eq!(lookup(n).expect("listed case").name(), *n);
+        }
+    }
+
+    #[test]
+    fn unknown_case_names_itself_and_the_cases() {
+        let e = lookup("sedov-taylor").unwrap_err().to_string();
+        assert!(e.contains("'sedov-taylor'"), "{e}");
+        for n in names() {
+            assert!(e.contains(n), "{e}");
+        }
+    }
+
+    #[test]
+    fn every_case_sets_up_with_its_own_scheme() {
+        for case in registry() {
+            assert!(case.default_side() >= 4, "{}", case.name());
+            assert!(case.default_end_time() > 0.0, "{}", case.name());
+            assert!(!case.description().is_empty(), "{}", case.name());
+            // Whatever scheme the caller's config had, the case's wins.
+            let wrong = HydroConfig {
+                scheme: Scheme {
+                    gradients: sph_core::Gradients::Kernel,
+                    grad_h: false,
+                    viscosity: sph_core::Viscosity::Constant { alpha: 3.0 },
+                    conductivity: Some(1.0),
+                },
+                ..Default::default()
+            };
+            let scene = case.setup(6, wrong).expect("set-up");
+            let mut want = HydroConfig::default();
+            SchemeOverrides::default().apply(case.default_scheme(), case.physics(), &mut want);
+            assert_eq!(scene.config, want, "{}", case.name());
+            assert_eq!(scene.case, case.name());
+            let p = &scene.particles;
+            assert!(!p.is_empty(), "{}", case.name());
+            assert_eq!(p.fields(), field_set(&want), "{}", case.name());
+            assert!(p.h.iter().all(|&h| h > 0.0), "{}", case.name());
+            assert!(scene.dt0 > 0.0);
+            assert_eq!(
+                scene.energies.map(<[EnergyPoint]>::len),
+                case.energies().map(<[EnergyPoint]>::len)
+            );
+        }
+    }
+
+    #[test]
+    fn overrides_reach_the_scene() {
+        let case = lookup("sedov").expect("sedov");
+        let o = SchemeOverrides {
+            gradients: Some(sph_core::Gradients::Kernel),
+            alpha: Some(0.5),
+            ..Default::default()
+        };
+        let scene = case
+            .setup_with(5, HydroConfig::default(), &o)
+            .expect("set-up");
+        assert_eq!(scene.config.scheme.gradients, sph_core::Gradients::Kernel);
+        assert_eq!(scene.config.scheme.alpha(), 0.5);
+        assert!(case.setup(0, HydroConfig::default()).is_err());
+    }
 }

@@ -3,21 +3,15 @@
 //! particle's initial state, initial pressure from the incompressible
 //! Poisson series.
 
-use super::{initial_h, CaseInfo, Scene};
+use super::{field_set, initial_h, Case, InitialState, Physics, Scheme};
 use crate::AppError;
-use sph_core::{Eos, FieldSet, HydroConfig, Particles};
+use sph_core::{Eos, HydroConfig, Particles};
 use sph_tree::{Boundary, BoundingBox};
 use std::f64::consts::PI;
 
-/// Listing entry.
-pub const INFO: CaseInfo = CaseInfo {
-    name: "square-patch",
-    description: "Rotating square patch (stiff Tait EOS, free surface); checks angular momentum",
-    default_side: 20,
-    scheme: super::Scheme::PAPER,
-    softening: 1.0,
-    default_end_time: 0.05,
-};
+/// The case (registered as `square-patch`).
+#[derive(Debug, Clone, Copy)]
+pub struct SquarePatch;
 
 /// Side of the square and height of the slab (cm).
 pub const L: f64 = 100.0;
@@ -54,48 +48,66 @@ pub fn initial_pressure(x: f64, y: f64) -> f64 {
     RHO0 * p
 }
 
-/// Builds the scene: `side x side` particles per layer, `side` layers.
-pub fn setup(side: usize, mut config: HydroConfig) -> Result<Scene, AppError> {
-    let n = side * side * side;
-    let dx = L / side as f64;
-    let mut p = Particles::new(
-        n,
-        FieldSet {
-            iad: config.scheme.gradients == sph_core::Gradients::Iad,
-            grad_h: config.scheme.grad_h,
-            gravity: false,
-        },
-    );
-    let h0 = initial_h(config.neighbors.ng0, L * L * L, n);
-    let m = RHO0 * L * L * L / n as f64;
-    let mut p_ref = vec![0.0; n];
-    for i in 0..n {
-        let c = [i % side, i / side % side, i / (side * side)];
-        let q = c.map(|k| -0.5 * L + (k as f64 + 0.5) * dx);
-        (p.x[i], p.y[i], p.z[i]) = (q[0], q[1], q[2]);
-        (p.vx[i], p.vy[i]) = (OMEGA * q[1], -OMEGA * q[0]);
-        p.m[i] = m;
-        p.h[i] = h0;
-        p.u[i] = 1.0;
-        p_ref[i] = initial_pressure(q[0], q[1]);
+impl Case for SquarePatch {
+    fn name(&self) -> &'static str {
+        "square-patch"
     }
-    // Reference density 0 = calibrate from the first density evaluation.
-    p.eos_ref = [vec![0.0; n], p_ref];
-    config.eos = Eos::TaitReferenced { c0: C0 };
-    // Pure hydrodynamics: no self-gravity whatever the caller passed.
-    config.gravity = None;
-    let bbox = BoundingBox::new(
-        [-0.5 * L; 3],
-        [0.5 * L; 3],
-        [Boundary::Open, Boundary::Open, Boundary::Periodic],
-    )?;
-    Ok(Scene {
-        case: INFO.name,
-        particles: p,
-        bbox,
-        config,
-        dt0: 1e-5,
-        reference: None,
-        energies: None,
-    })
+
+    fn description(&self) -> &'static str {
+        "Rotating square patch (stiff Tait EOS, free surface); checks angular momentum"
+    }
+
+    fn default_side(&self) -> usize {
+        20
+    }
+
+    fn default_end_time(&self) -> f64 {
+        0.05
+    }
+
+    /// The paper's scheme.
+    fn default_scheme(&self) -> Scheme {
+        Scheme::PAPER
+    }
+
+    /// The Tait EOS about each particle's initial state, sound speed
+    /// [`C0`].
+    fn physics(&self) -> Physics {
+        Physics {
+            eos: Eos::TaitReferenced { c0: C0 },
+            softening: None,
+        }
+    }
+
+    /// `side x side` particles per layer, `side` layers.
+    fn initial_state(&self, side: usize, config: &HydroConfig) -> Result<InitialState, AppError> {
+        let n = side * side * side;
+        let dx = L / side as f64;
+        let mut p = Particles::new(n, field_set(config));
+        let h0 = initial_h(config.neighbors.ng0, L * L * L, n);
+        let m = RHO0 * L * L * L / n as f64;
+        let mut p_ref = vec![0.0; n];
+        for i in 0..n {
+            let c = [i % side, i / side % side, i / (side * side)];
+            let q = c.map(|k| -0.5 * L + (k as f64 + 0.5) * dx);
+            (p.x[i], p.y[i], p.z[i]) = (q[0], q[1], q[2]);
+            (p.vx[i], p.vy[i]) = (OMEGA * q[1], -OMEGA * q[0]);
+            p.m[i] = m;
+            p.h[i] = h0;
+            p.u[i] = 1.0;
+            p_ref[i] = initial_pressure(q[0], q[1]);
+        }
+        // Reference density 0 = calibrate from the first density evaluation.
+        p.eos_ref = [vec![0.0; n], p_ref];
+        let bbox = BoundingBox::new(
+            [-0.5 * L; 3],
+            [0.5 * L; 3],
+            [Boundary::Open, Boundary::Open, Boundary::Periodic],
+        )?;
+        Ok(InitialState {
+            particles: p,
+            bbox,
+            dt0: 1e-5,
+        })
+    }
 }

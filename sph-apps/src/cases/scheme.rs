@@ -1,0 +1,150 @@
+//! What a case runs with, and how a run overrides it: the one place where
+//! a case's scheme ([`Scheme`], from sph-core) and physics ([`Physics`])
+//! are written into a [`HydroConfig`].
+
+pub use sph_core::Scheme;
+use sph_core::{Eos, Gradients, HydroConfig};
+use sph_gravity::GravityParams;
+
+/// The physics of a case besides its scheme: the equation of state and
+/// self-gravity.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Physics {
+    /// Equation of state.
+    pub eos: Eos,
+    /// Self-gravity with pairs softened within
+    /// `softening * (h_i + h_j)`, or none.
+    pub softening: Option<f64>,
+}
+
+impl Physics {
+    /// An ideal gas with gamma = 5/3, no self-gravity.
+    pub const IDEAL_GAS: Physics = Physics {
+        eos: Eos::IdealGas { gamma: 5.0 / 3.0 },
+        softening: None,
+    };
+}
+
+/// What a run changes in a case's scheme (the command line's `--scheme`,
+/// `--gradients`, `--grad-h`, `--alpha`, `--av-switches`,
+/// `--conductivity`, `--softening`); `None` keeps the case's choice. The
+/// default overrides nothing.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SchemeOverrides {
+    /// A whole scheme in place of the case's (a preset), before the
+    /// single overrides below.
+    pub preset: Option<Scheme>,
+    /// Gradient operator.
+    pub gradients: Option<Gradients>,
+    /// Whether the grad-h factor Omega enters.
+    pub grad_h: Option<bool>,
+    /// Viscosity strength (the maximum when switches are on).
+    pub alpha: Option<f64>,
+    /// Time-dependent viscosity switches.
+    pub av_switches: Option<bool>,
+    /// Artificial conductivity `alpha_u` (0: off).
+    pub conductivity: Option<f64>,
+    /// Self-gravity softening scale (cases with self-gravity).
+    pub softening: Option<f64>,
+}
+
+impl SchemeOverrides {
+    /// `base` (or the preset) with these overrides.
+    pub fn over(&self, base: Scheme) -> Scheme {
+        let mut s = self.preset.unwrap_or(base);
+        if let Some(g) = self.gradients {
+            s.gradients = g;
+        }
+        if let Some(g) = self.grad_h {
+            s.grad_h = g;
+        }
+        if let Some(a) = self.alpha {
+            s.set_alpha(a);
+        }
+        if let Some(on) = self.av_switches {
+            s.set_switches(on);
+        }
+        if let Some(c) = self.conductivity {
+            s.conductivity = (c > 0.0).then_some(c);
+        }
+        s
+    }
+
+    /// Writes the case's scheme with these overrides, and its physics,
+    /// into `config`. Self-gravity keeps the parameters `config` already
+    /// has (e.g. the opening angle) with the case's (or the overridden)
+    /// softening, or the defaults; without it `config.gravity` is `None`
+    /// whatever the caller passed.
+    pub fn apply(&self, scheme: Scheme, physics: Physics, config: &mut HydroConfig) {
+        config.scheme = self.over(scheme);
+        config.eos = physics.eos;
+        config.gravity = physics.softening.map(|s| GravityParams {
+            softening: self.softening.unwrap_or(s),
+            ..config.gravity.unwrap_or_default()
+        });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sph_core::Viscosity;
+
+    #[test]
+    fn the_paper_scheme_is_the_default_config() {
+        let mut config = HydroConfig::default();
+        SchemeOverrides::default().apply(Scheme::PAPER, Physics::IDEAL_GAS, &mut config);
+        assert_eq!(config, HydroConfig::default());
+    }
+
+    #[test]
+    fn gravity_keeps_the_callers_parameters_with_the_cases_softening() {
+        let mut config = HydroConfig {
+            gravity: Some(GravityParams {
+                theta: 0.7,
+                ..Default::default()
+            }),
+            ..Default::default()
+        };
+        let gravity = Physics {
+            softening: Some(0.25),
+            ..Physics::IDEAL_GAS
+        };
+        let none = SchemeOverrides::default();
+        none.apply(Scheme::PAPER, gravity, &mut config);
+        let g = config.gravity.expect("gravity on");
+        assert_eq!((g.theta, g.softening), (0.7, 0.25));
+        // Without self-gravity the caller's parameters are dropped.
+        none.apply(Scheme::PAPER, Physics::IDEAL_GAS, &mut config);
+        assert!(config.gravity.is_none());
+        // And switched on from nothing, with the defaults.
+        none.apply(Scheme::PAPER, gravity, &mut config);
+        assert_eq!(config.gravity.expect("gravity on").theta, 0.5);
+    }
+
+    #[test]
+    fn overrides_change_only_what_they_name() {
+        let none = SchemeOverrides::default();
+        assert_eq!(none.over(Scheme::PAPER), Scheme::PAPER);
+        let o = SchemeOverrides {
+            alpha: Some(0.3),
+            av_switches: Some(true),
+            conductivity: Some(0.0),
+            ..Default::default()
+        };
+        let s = o.over(Scheme::PAPER);
+        assert!(matches!(s.viscosity, Viscosity::Switched(p) if p.alpha_max == 0.3));
+        assert_eq!(s.gradients, Scheme::PAPER.gradients);
+        assert_eq!(s.conductivity, None);
+        // A preset replaces the case's scheme, then the overrides apply.
+        let p = SchemeOverrides {
+            preset: Some(Scheme::NOH),
+            av_switches: Some(false),
+            ..Default::default()
+        };
+        assert_eq!(
+            p.over(Scheme::PAPER).viscosity,
+            Viscosity::Constant { alpha: 0.7 }
+        );
+    }
+}

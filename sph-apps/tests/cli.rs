@@ -1,0 +1,175 @@
+//! The `sphexa` binary itself: bad input is refused with a message naming
+//! the value and what is allowed (never a panic); `sphexa cases` lists the
+//! registry; a tiny run writes its outputs.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn sphexa(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sphexa"))
+        .args(args)
+        .output()
+        .expect("the sphexa binary runs")
+}
+
+/// A fresh folder for one test's files.
+fn scratch(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("cli-{name}"));
+    std::fs::remove_dir_all(&dir).ok();
+    std::fs::create_dir_all(&dir).expect("scratch folder");
+    dir
+}
+
+/// Runs `sphexa run ARGS`, expects a refusal, and returns stderr.
+fn refused(args: &[&str]) -> String {
+    let mut all = vec!["run"];
+    all.extend_from_slice(args);
+    let out = sphexa(&all);
+    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(
+        !out.status.success(),
+        "sphexa {all:?} succeeded; stderr: {stderr}"
+    );
+    assert!(
+        !stderr.contains("panicked"),
+        "sphexa {all:?} panicked: {stderr}"
+    );
+    stderr
+}
+
+fn assert_mentions(stderr: &str, words: &[&str]) {
+    for w in words {
+        assert!(stderr.contains(w), "stderr lacks {w:?}:\n{stderr}");
+    }
+}
+
+#[test]
+fn unknown_case_is_named_with_the_registered_cases() {
+    let e = refused(&["sedov-taylor", "--steps", "1", "-q"]);
+    let mut words = vec!["sedov-taylor"];
+    words.extend(sph_apps::cases::names());
+    assert_mentions(&e, &words);
+}
+
+#[test]
+fn zero_and_negative_sides_are_refused() {
+    for side in ["0", "-3", "1001", "abc"] {
+        let e = refused(&["sedov", "-n", side, "--steps", "1", "-q"]);
+        assert_mentions(&e, &[&format!("'{side}'"), "--side", "4 to 1000"]);
+    }
+}
+
+#[test]
+fn zero_threads_are_refused() {
+    for threads in ["0", "-2"] {
+        let e = refused(&["sedov", "--threads", threads, "--steps", "1", "-q"]);
+        assert_mentions(&e, &[&format!("'{threads}'"), "--threads", "at least 1"]);
+    }
+}
+
+#[test]
+fn negative_numbers_are_refused_with_the_allowed_range() {
+    for (option, value, allowed) in [
+        ("--alpha", "-1", ">= 0"),
+        ("--conductivity", "-0.5", ">= 0"),
+        ("--softening", "-1", ">= 0"),
+        ("--theta", "-1", "positive"),
+        ("--courant", "1.5", "(0, 1]"),
+        ("--steps", "-1", "at least 1"),
+        ("--alpha", "nan", "finite"),
+    ] {
+        let e = refused(&["evrard", "-n", "4", option, value, "-q"]);
+        assert_mentions(&e, &[&format!("'{value}'"), option, allowed]);
+    }
+}
+
+#[test]
+fn negative_end_time_is_refused() {
+    for t in ["-1", "0", "inf"] {
+        let e = refused(&["sedov", "-n", "4", "--end-time", t, "-q"]);
+        assert_mentions(&e, &[&format!("'{t}'"), "--end-time", "positive"]);
+    }
+}
+
+#[test]
+fn unknown_kernel_is_named_with_the_allowed_kernels() {
+    let e = refused(&["sedov", "--kernel", "gauss", "--steps", "1", "-q"]);
+    assert_mentions(&e, &["gauss", "--kernel", "m4", "wendland-c2", "sinc"]);
+    let e = refused(&["sedov", "--kernel", "sinc:0", "--steps", "1", "-q"]);
+    assert_mentions(&e, &["--kernel", "sinc:0", "1 <= n <= 1000"]);
+}
+
+#[test]
+fn neighbour_counts_must_be_ordered() {
+    let e = refused(&[
+        "sedov", "--ng0", "200", "--ngmax", "150", "--steps", "1", "-q",
+    ]);
+    assert_mentions(&e, &["--ng0 200", "--ngmax 150", "at least 8"]);
+}
+
+#[test]
+fn an_output_folder_that_cannot_be_created_is_refused() {
+    let dir = scratch("bad-out");
+    let file = dir.join("a-file");
+    std::fs::write(&file, "not a folder").expect("write a file");
+    let bad = file.join("out");
+    let bad = bad.to_str().expect("UTF-8 path");
+    let e = refused(&["sedov", "-n", "4", "--steps", "1", "-q", "--out", bad]);
+    assert_mentions(&e, &["--out", bad, "cannot create"]);
+}
+
+#[test]
+fn cases_lists_every_registered_case() {
+    let out = sphexa(&["cases"]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    for case in sph_apps::cases::registry() {
+        let line = text
+            .lines()
+            .find(|l| l.split_whitespace().next() == Some(case.name()))
+            .unwrap_or_else(|| panic!("{} not listed:\n{text}", case.name()));
+        assert!(line.contains(case.description()), "{line}");
+        assert!(line.contains(&case.default_side().to_string()), "{line}");
+    }
+}
+
+#[test]
+fn run_help_lists_the_cases_and_the_defaults() {
+    let out = sphexa(&["run", "--help"]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    for name in sph_apps::cases::names() {
+        assert!(
+            text.contains(name),
+            "{name} missing from run --help:\n{text}"
+        );
+    }
+    for default in ["[default: sinc:6]", "[default: 100]", "[default: hilbert]"] {
+        assert!(text.contains(default), "{default} missing:\n{text}");
+    }
+}
+
+#[test]
+fn a_tiny_sedov_run_writes_its_outputs() {
+    let dir = scratch("sedov").join("out");
+    let out = sphexa(&[
+        "run",
+        "sedov",
+        "-n",
+        "8",
+        "--steps",
+        "2",
+        "-q",
+        "--out",
+        dir.to_str().expect("UTF-8 path"),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "sphexa failed: {stderr}");
+    let conserved = std::fs::read_to_string(dir.join("conserved.csv")).expect("conserved.csv");
+    let mut lines = conserved.lines();
+    assert!(lines.next().expect("header").starts_with("step,t,dt,"));
+    // One row per step.
+    assert_eq!(lines.count(), 2, "{conserved}");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("sedov: 512 particles, 2 steps"), "{stdout}");
+}
