@@ -264,6 +264,11 @@ fn list_cases() {
             scheme_options(&c.default_scheme(), c.physics().softening)
         );
     }
+    println!("\nscheme presets (sphexa run CASE --scheme NAME):");
+    for (name, scheme, what) in PRESETS {
+        println!("{name:<14} {what}");
+        println!("{:<14} {}", "", scheme_options(&scheme, None));
+    }
 }
 
 /// A scheme (and the case's softening) written as the `sphexa run`

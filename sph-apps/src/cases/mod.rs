@@ -4,8 +4,9 @@
 //! A case is a type implementing [`Case`], in its own module, listed once
 //! in [`CASES`]: the command line (`sphexa cases`, `sphexa run CASE`), its
 //! help text, its unknown-case error and the tests all read that list.
-//! Adding a case is one new file here and one line in [`CASES`] (plus its
-//! `pub mod` line).
+//! Adding a case is one new file here and one line in the `registry!`
+//! list below (`module::CaseType`), which declares the module and lists the
+//! case in [`CASES`].
 //!
 //! ```
 //! use sph_apps::cases;
@@ -23,21 +24,26 @@ use crate::AppError;
 use sph_core::{FieldSet, HydroConfig, Particles};
 use sph_tree::BoundingBox;
 
-pub mod evrard;
-pub mod noh;
 mod scheme;
-pub mod sedov;
-pub mod square_patch;
 
 pub use scheme::{Physics, Scheme, SchemeOverrides};
 
-/// Every case, in listing order: the only list of cases.
-pub static CASES: &[&dyn Case] = &[
-    &sedov::SedovBlast,
-    &noh::NohImplosion,
-    &square_patch::SquarePatch,
-    &evrard::EvrardCollapse,
-];
+/// Declares each case's module and lists its type in [`CASES`]: one line
+/// per case.
+macro_rules! registry {
+    ($($module:ident :: $case:ident),* $(,)?) => {
+        $(pub mod $module;)*
+        /// Every case, in listing order: the only list of cases.
+        pub static CASES: &[&dyn Case] = &[$(&$module::$case),*];
+    };
+}
+
+registry! {
+    sedov::SedovBlast,
+    noh::NohImplosion,
+    square_patch::SquarePatch,
+    evrard::EvrardCollapse,
+}
 
 /// Every case, in listing order (the same as [`CASES`]).
 pub fn registry() -> &'static [&'static dyn Case] {
