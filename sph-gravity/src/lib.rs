@@ -86,7 +86,6 @@
 //! * **Boundaries**: open only; a periodic box is refused with
 //!   [`GravityError::PeriodicBox`] (periodic gravity needs Ewald sums).
 
-#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 pub mod direct;
