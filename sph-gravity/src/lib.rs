@@ -92,6 +92,7 @@ pub mod direct;
 pub mod distributed;
 mod error;
 pub mod multipole;
+mod pair;
 mod traversal;
 
 pub use distributed::{Decomposition, DistributedGravity};
