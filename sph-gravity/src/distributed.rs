@@ -80,11 +80,10 @@ impl DistributedGravity {
         out: &mut GravityField,
     ) -> Result<GravityStats, GravityError> {
         if dec.key_start.len() != comm.size() + 1 {
-            return Err(GravityError::InvalidDecomposition(format!(
-                "{} key-range bounds for {} ranks (need size + 1)",
-                dec.key_start.len(),
-                comm.size()
-            )));
+            return Err(GravityError::InvalidDecomposition {
+                bounds: dec.key_start.len(),
+                ranks: comm.size(),
+            });
         }
         let mut stats = self.local.compute(tree, dec.bbox, x, y, z, m, h, out)?;
         if comm.size() == 1 {
@@ -138,9 +137,7 @@ impl DistributedGravity {
             buf.extend(parts);
             sends.push((r, buf));
         }
-        let received = comm
-            .sparse_exchange(&sends)
-            .map_err(|e| GravityError::Communication(e.to_string()))?;
+        let received = comm.sparse_exchange(&sends)?;
 
         // Remote multipoles and particles, in ascending source rank.
         let mut remote_mp: Vec<Multipole> = Vec::new();
