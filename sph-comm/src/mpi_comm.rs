@@ -41,6 +41,7 @@ struct Inner {
 // is never called concurrently, and MPI was initialised with at least
 // MPI_THREAD_SERIALIZED, or with MPI_THREAD_FUNNELED, in which case
 // `MpiComm::lock` refuses every thread but the initialising one.
+#[allow(unsafe_code)] // the workspace denies unsafe code; this is its one exception
 unsafe impl Send for Inner {}
 
 /// A [`Communicator`] over `MPI_COMM_WORLD` (a private duplicate of it, so

@@ -86,15 +86,10 @@ impl<C: Communicator> Domain<C> {
     /// particle a rank holds as its own.
     pub fn new(comm: C, config: DomainConfig) -> Result<Self, DomainError> {
         if config.bucket == 0 {
-            return Err(DomainError::Invalid(
-                "global bucket size must be at least 1".into(),
-            ));
+            return Err(DomainError::InvalidBucket(config.bucket));
         }
         if !(config.h_margin >= 1.0 && config.h_margin.is_finite()) {
-            return Err(DomainError::Invalid(format!(
-                "smoothing-length margin {} must be a finite number >= 1",
-                config.h_margin
-            )));
+            return Err(DomainError::InvalidHMargin(config.h_margin));
         }
         Ok(Self {
             comm,

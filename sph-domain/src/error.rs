@@ -6,9 +6,12 @@ use sph_tree::TreeError;
 /// What can go wrong while decomposing or exchanging.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum DomainError {
-    /// A bad parameter.
-    #[error("{0}")]
-    Invalid(String),
+    /// A global bucket size of zero.
+    #[error("global bucket size must be at least 1, got {0}")]
+    InvalidBucket(u64),
+    /// A smoothing-length margin that is not a finite number `>= 1`.
+    #[error("smoothing-length margin {0} must be a finite number >= 1")]
+    InvalidHMargin(f64),
     /// No rank holds any particle.
     #[error("the domain is empty: no rank holds a particle")]
     Empty,

@@ -8,7 +8,7 @@
 
 use proptest::prelude::*;
 use sph_comm::{run_ranks, Communicator};
-use sph_domain::{Domain, DomainConfig, ParticleFields, Points};
+use sph_domain::{Domain, DomainConfig, DomainError, ParticleFields, Points};
 use sph_tree::{compute_keys, Boundary, BoundingBox, Curve};
 
 struct Rng(u64);
@@ -184,6 +184,30 @@ fn open_box_on_2_and_3_ranks() {
 #[test]
 fn rank_without_peers_still_exchanges() {
     run(4, 600, 9901396551980440087, Boundary::Periodic);
+}
+
+/// A bad configuration is refused with the offending value.
+#[test]
+fn bad_config_is_refused_with_its_value() {
+    let new = |config| Domain::new(sph_comm::SerialComm::new(), config).map(|_| ());
+    let bucket = DomainConfig {
+        bucket: 0,
+        ..DomainConfig::default()
+    };
+    assert_eq!(new(bucket), Err(DomainError::InvalidBucket(0)));
+    for margin in [0.9, f64::INFINITY] {
+        let config = DomainConfig {
+            h_margin: margin,
+            ..DomainConfig::default()
+        };
+        assert_eq!(new(config), Err(DomainError::InvalidHMargin(margin)));
+    }
+    let nan = DomainConfig {
+        h_margin: f64::NAN,
+        ..DomainConfig::default()
+    };
+    assert!(matches!(new(nan), Err(DomainError::InvalidHMargin(m)) if m.is_nan()));
+    assert_eq!(new(DomainConfig::default()), Ok(()));
 }
 
 proptest! {

@@ -13,11 +13,14 @@
 //! that the force is minus its gradient and energy is conserved; `-m/r`
 //! outside).
 //!
-//! Coincident pairs with `r_eff = 0` (zero softening) are skipped. The
+//! Coincident pairs with `r_eff = 0` (zero softening) add nothing. The
 //! code is deliberately plain (one scalar loop per target, sources in index
-//! order), independent of the tree's kernels. Parallel over targets; the
-//! result does not depend on the thread count.
+//! order), independent of the tree's traversal and multipoles; the pair
+//! formula is the tree's own (one function, so the two cannot drift
+//! apart). Parallel over targets; the result does not depend on the thread
+//! count.
 
+use crate::pair::softened_p2p;
 use crate::{validate, GravityError, GravityField};
 use rayon::prelude::*;
 
@@ -59,24 +62,13 @@ pub fn direct_sum(
                 if j == i {
                     continue;
                 }
-                let (dx, dy, dz) = (x[j] - xi, y[j] - yi, z[j] - zi);
-                let r2_true = dx * dx + dy * dy + dz * dz;
-                let mut r2 = r2_true;
-                if let Some(h) = h {
-                    let hh = hi + h[j];
-                    r2 = r2.max(hh * hh);
-                }
-                if r2 == 0.0 {
-                    continue;
-                }
-                let r = r2.sqrt();
-                let mr3 = m[j] / (r2 * r);
-                sx += mr3 * dx;
-                sy += mr3 * dy;
-                sz += mr3 * dz;
-                // Uniform-sphere potential inside the softening length (its
-                // gradient is the softened force); -m/r outside.
-                sp -= m[j] / r * (1.5 - 0.5 * r2_true / r2);
+                let d = [x[j] - xi, y[j] - yi, z[j] - zi];
+                let eps = h.map_or(0.0, |h| hi + h[j]);
+                let (a, p) = softened_p2p::<true>(d, m[j], eps, true);
+                sx += a[0];
+                sy += a[1];
+                sz += a[2];
+                sp += p;
             }
             *ax = g * sx;
             *ay = g * sy;

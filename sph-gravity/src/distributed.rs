@@ -15,7 +15,8 @@
 //! the number of threads.
 
 use crate::multipole::Multipole;
-use crate::traversal::mac_radius;
+use crate::pair::softened_p2p;
+use crate::traversal::{dist2_point_box, mac_radius, max_of};
 use crate::{GravityError, GravityField, GravityParams, GravityStats, TreeGravity};
 use rayon::prelude::*;
 use sph_comm::Communicator;
@@ -79,11 +80,10 @@ impl DistributedGravity {
         out: &mut GravityField,
     ) -> Result<GravityStats, GravityError> {
         if dec.key_start.len() != comm.size() + 1 {
-            return Err(GravityError::InvalidDecomposition(format!(
-                "{} key-range bounds for {} ranks (need size + 1)",
-                dec.key_start.len(),
-                comm.size()
-            )));
+            return Err(GravityError::InvalidDecomposition {
+                bounds: dec.key_start.len(),
+                ranks: comm.size(),
+            });
         }
         let mut stats = self.local.compute(tree, dec.bbox, x, y, z, m, h, out)?;
         if comm.size() == 1 {
@@ -95,9 +95,7 @@ impl DistributedGravity {
         self.hmax.resize(tree.num_nodes(), 0.0);
         if let Some(h) = h {
             for node in 0..tree.num_nodes() as NodeId {
-                self.hmax[node as usize] = h[tree.particles(node)]
-                    .iter()
-                    .fold(0.0, |a: f64, &b| a.max(b));
+                self.hmax[node as usize] = max_of(&h[tree.particles(node)]);
             }
         }
         let mps = self.local.multipoles().as_slice();
@@ -139,9 +137,7 @@ impl DistributedGravity {
             buf.extend(parts);
             sends.push((r, buf));
         }
-        let received = comm
-            .sparse_exchange(&sends)
-            .map_err(|e| GravityError::Communication(e.to_string()))?;
+        let received = comm.sparse_exchange(&sends)?;
 
         // Remote multipoles and particles, in ascending source rank.
         let mut remote_mp: Vec<Multipole> = Vec::new();
@@ -179,19 +175,12 @@ impl DistributedGravity {
                 }
                 for q in &remote_p {
                     let d = [q[0] - pi[0], q[1] - pi[1], q[2] - pi[2]];
-                    let r2_true = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
                     let eps = soft_scale * (hi + q[4]);
-                    let r2 = r2_true.max(eps * eps);
-                    if r2 == 0.0 {
-                        continue;
-                    }
-                    let inv_r = 1.0 / r2.sqrt();
-                    let inv_r2 = inv_r * inv_r;
-                    let mr = q[3] * inv_r;
+                    let (acc, p) = softened_p2p::<true>(d, q[3], eps, true);
                     for k in 0..3 {
-                        a[k] += mr * inv_r2 * d[k];
+                        a[k] += acc[k];
                     }
-                    s -= mr * (1.5 - 0.5 * r2_true * inv_r2);
+                    s += p;
                 }
                 *ax += g * a[0];
                 *ay += g * a[1];
@@ -206,7 +195,7 @@ impl DistributedGravity {
 
 /// The aligned octree cells (as boxes) that tile the key range `[lo, hi)`:
 /// at most two per level.
-pub fn range_cells(
+fn range_cells(
     mut lo: u64,
     hi: u64,
     bbox: &BoundingBox,
@@ -238,14 +227,4 @@ pub fn range_cells(
         lo += 1u64 << (3 * (MAX_LEVEL - level));
     }
     out
-}
-
-/// Squared distance from point `p` to the box `[lo, hi]` (zero inside).
-fn dist2_point_box(p: [f64; 3], lo: [f64; 3], hi: [f64; 3]) -> f64 {
-    let mut d2 = 0.0;
-    for k in 0..3 {
-        let gap = (lo[k] - p[k]).max(p[k] - hi[k]).max(0.0);
-        d2 += gap * gap;
-    }
-    d2
 }

@@ -1,5 +1,6 @@
 //! Errors of the gravity crate.
 
+use sph_comm::CommError;
 use sph_tree::TreeError;
 
 /// What can go wrong when evaluating self-gravity.
@@ -64,12 +65,18 @@ pub enum GravityError {
     /// A softening scale that is negative or not finite.
     #[error("softening scale {0} must be a finite number >= 0")]
     InvalidSoftening(f64),
-    /// Key ranges that do not describe a decomposition over the ranks.
-    #[error("invalid decomposition: {0}")]
-    InvalidDecomposition(String),
+    /// Key ranges that do not describe a decomposition over the ranks:
+    /// `bounds` key-range bounds for `ranks` ranks (`ranks + 1` needed).
+    #[error("invalid decomposition: {bounds} key-range bounds for {ranks} ranks (need size + 1)")]
+    InvalidDecomposition {
+        /// The number of key-range bounds given.
+        bounds: usize,
+        /// The number of ranks.
+        ranks: usize,
+    },
     /// Communication between ranks failed.
-    #[error("communication failed: {0}")]
-    Communication(String),
+    #[error(transparent)]
+    Communication(#[from] CommError),
     /// An error of the tree crate (key computation or tree build).
     #[error(transparent)]
     Tree(#[from] TreeError),

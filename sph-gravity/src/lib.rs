@@ -86,13 +86,13 @@
 //! * **Boundaries**: open only; a periodic box is refused with
 //!   [`GravityError::PeriodicBox`] (periodic gravity needs Ewald sums).
 
-#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 pub mod direct;
 pub mod distributed;
 mod error;
 pub mod multipole;
+mod pair;
 mod traversal;
 
 pub use distributed::{Decomposition, DistributedGravity};

@@ -2,6 +2,7 @@
 //! traversal per target group feeding the M2P and P2P kernels.
 
 use crate::multipole::{m2p_point, upward, ExpansionOrder, Multipole, Multipoles};
+use crate::pair::softened_p2p;
 use crate::{validate, GravityError, GravityField, GravityParams, GravityStats};
 use rayon::prelude::*;
 use sph_tree::{apply_permutation, compute_keys, BoundingBox, Curve, KeySorter, NodeId, Octree};
@@ -263,9 +264,15 @@ pub(crate) fn scale_softening<'a>(
     }
 }
 
+/// The largest of `v` and 0 (0 for an empty slice): the largest
+/// smoothing length of a node or group.
+pub(crate) fn max_of(v: &[f64]) -> f64 {
+    v.iter().fold(0.0, |a: f64, &b| a.max(b))
+}
+
 /// Squared distance from point `p` to the box `[lo, hi]` (zero inside).
 #[inline(always)]
-fn dist2_point_box(p: [f64; 3], lo: [f64; 3], hi: [f64; 3]) -> f64 {
+pub(crate) fn dist2_point_box(p: [f64; 3], lo: [f64; 3], hi: [f64; 3]) -> f64 {
     let mut d2 = 0.0;
     for k in 0..3 {
         let gap = (lo[k] - p[k]).max(p[k] - hi[k]).max(0.0);
@@ -306,12 +313,8 @@ impl Evaluator {
             Some(h) => upward(
                 tree,
                 &mut self.hmax,
-                |node| {
-                    h[tree.particles(node)]
-                        .iter()
-                        .fold(0.0, |a: f64, &b| a.max(b))
-                },
-                |c| c.iter().fold(0.0, |a: f64, &b| a.max(b)),
+                |node| max_of(&h[tree.particles(node)]),
+                max_of,
             ),
             None => {
                 self.hmax.clear();
@@ -411,9 +414,7 @@ impl Ctx<'_> {
                 hi[d] = hi[d].max(p[d]);
             }
         }
-        let gh = self.h.map_or(0.0, |h| {
-            h[range.clone()].iter().fold(0.0, |a: f64, &b| a.max(b))
-        });
+        let gh = self.h.map_or(0.0, |h| max_of(&h[range.clone()]));
 
         lists.m2p.clear();
         lists.p2p.clear();
@@ -566,27 +567,13 @@ fn p2p_group<const SOFT: bool>(
         // Target index of the self pair (>= n when the source is outside the group).
         let self_i = (s0 + j).wrapping_sub(t0);
         for i in 0..n {
-            let (dx, dy, dz) = (xj - tx[i], yj - ty[i], zj - tz[i]);
-            let r2_true = dx * dx + dy * dy + dz * dz;
-            let mut r2 = r2_true;
-            if SOFT {
-                let hh = th[i] + hj;
-                r2 = r2.max(hh * hh);
-            }
-            let inv_r = if r2 > 0.0 && i != self_i {
-                1.0 / r2.sqrt()
-            } else {
-                0.0
-            };
-            let mr = mj * inv_r;
-            let inv_r2 = inv_r * inv_r;
-            let mr3 = mr * inv_r2;
-            ax[i] += mr3 * dx;
-            ay[i] += mr3 * dy;
-            az[i] += mr3 * dz;
-            // Inside the softening length the potential of a uniform sphere,
-            // whose gradient is the softened force (1 outside).
-            phi[i] -= mr * (1.5 - 0.5 * r2_true * inv_r2);
+            let d = [xj - tx[i], yj - ty[i], zj - tz[i]];
+            let eps = if SOFT { th[i] + hj } else { 0.0 };
+            let (a, p) = softened_p2p::<SOFT>(d, mj, eps, i != self_i);
+            ax[i] += a[0];
+            ay[i] += a[1];
+            az[i] += a[2];
+            phi[i] += p;
         }
     }
 }

@@ -1,9 +1,11 @@
 //! Invalid inputs give the documented errors, naming the bad value.
 
+use sph_comm::{CommError, SerialComm};
 use sph_gravity::{
-    compute_gravity, direct, GravityError, GravityField, GravityParams, TreeGravity,
+    compute_gravity, direct, Decomposition, DistributedGravity, GravityError, GravityField,
+    GravityParams, TreeGravity,
 };
-use sph_tree::{Boundary, BoundingBox, Octree, TreeError};
+use sph_tree::{Boundary, BoundingBox, Curve, Octree, TreeError};
 
 fn params(theta: f64) -> GravityParams {
     GravityParams {
@@ -139,4 +141,52 @@ fn empty_and_single_particle() {
     assert_eq!(f.acc(0), [0.0; 3]);
     assert_eq!(f.phi[0], 0.0);
     assert_eq!(st.p2p + st.m2p, 0);
+}
+
+#[test]
+fn decomposition_with_wrong_bound_count() {
+    let x = [0.1, 0.5, 0.9];
+    let keys = [1u64 << 10, 1 << 20, 1 << 30];
+    let tree = Octree::build(&keys, &x, &x, &x, 1).unwrap();
+    let bbox = BoundingBox::cube(0.0, 1.0, Boundary::Open).unwrap();
+    let mut solver = DistributedGravity::new(GravityParams::default()).unwrap();
+    let mut out = GravityField::new();
+    let dec = Decomposition {
+        bbox: &bbox,
+        curve: Curve::Hilbert,
+        key_start: &[0, 1 << 20, 1 << 62],
+        h_max: 0.0,
+    };
+    let e = solver
+        .compute(
+            &SerialComm::new(),
+            dec,
+            &tree,
+            &x,
+            &x,
+            &x,
+            &[1.0; 3],
+            None,
+            &mut out,
+        )
+        .unwrap_err();
+    assert_eq!(
+        e,
+        GravityError::InvalidDecomposition {
+            bounds: 3,
+            ranks: 1
+        }
+    );
+    assert!(
+        e.to_string().contains("3 key-range bounds for 1 ranks"),
+        "{e}"
+    );
+}
+
+#[test]
+fn communication_errors_keep_the_comm_error() {
+    let inner = CommError::InvalidRank { rank: 5, size: 4 };
+    let e = GravityError::from(inner.clone());
+    assert_eq!(e, GravityError::Communication(inner.clone()));
+    assert_eq!(e.to_string(), inner.to_string());
 }

@@ -1,10 +1,7 @@
 //! Hot paths of the tree crate: keys + sort, tree build and neighbour
 //! search, on uniform random particles with about 100 neighbours each.
 
-// criterion_group! defines a public function without docs.
-#![allow(missing_docs)]
-
-use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
+use criterion::{criterion_main, BatchSize, Criterion};
 use sph_tree::{
     apply_permutation, compute_keys, Boundary, BoundingBox, CompactNeighborList, Curve, KeySorter,
     NeighborList, NeighborSearch, Octree,
@@ -141,5 +138,9 @@ fn benches(c: &mut Criterion) {
     }
 }
 
-criterion_group!(tree_benches, benches);
-criterion_main!(tree_benches);
+/// The benchmark group: `criterion_group!` defines a `pub fn` without docs, which
+/// a private module keeps out of the public items that `missing_docs` checks.
+mod group {
+    criterion::criterion_group!(tree_benches, super::benches);
+}
+criterion_main!(group::tree_benches);

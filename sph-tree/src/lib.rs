@@ -54,7 +54,7 @@ pub mod sfc;
 pub use bbox::{Boundary, BoundingBox};
 pub use compact::CompactNeighborList;
 pub use error::TreeError;
-pub use neighbors::{for_each_neighbor, NeighborList, NeighborSearch, NeighborStats, GROUP_LANES};
+pub use neighbors::{NeighborList, NeighborSearch, NeighborStats, GROUP_LANES};
 pub use octree::{NodeId, Octree};
 pub use sfc::{
     apply_permutation, apply_permutation_f64, compute_keys, Curve, KeySorter, CELLS_PER_AXIS,

@@ -773,47 +773,6 @@ impl Context<'_> {
     }
 }
 
-/// Calls `f(j)` for every particle `j` with `|x_i - x_j| < r`, in ascending
-/// `j` (self included when `r > 0`).
-#[inline]
-pub fn for_each_neighbor(
-    tree: &Octree,
-    bbox: &BoundingBox,
-    x: &[f64],
-    y: &[f64],
-    z: &[f64],
-    i: usize,
-    r: f64,
-    mut f: impl FnMut(usize),
-) {
-    let p = [x[i], y[i], z[i]];
-    let r2 = r * r;
-    let periodic = (0..3).any(|a| bbox.is_periodic(a));
-    tree.traverse(
-        |node| {
-            let (lo, hi) = tree.node_box(node);
-            bbox.distance2_to_box(p, lo, hi) < r2
-        },
-        |leaf| {
-            let range = tree.particles(leaf);
-            if periodic {
-                for j in range {
-                    if bbox.distance2(p, [x[j], y[j], z[j]]) < r2 {
-                        f(j);
-                    }
-                }
-            } else {
-                for j in range {
-                    let (dx, dy, dz) = (p[0] - x[j], p[1] - y[j], p[2] - z[j]);
-                    if dx * dx + dy * dy + dz * dz < r2 {
-                        f(j);
-                    }
-                }
-            }
-        },
-    );
-}
-
 /// Splits the targets into runs of `PARTICLES_PER_CHUNK` consecutive
 /// particles, one parallel task each (a multiple of the search groups and
 /// list groups, counted from the first target).
