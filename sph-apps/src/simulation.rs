@@ -7,7 +7,7 @@
 //! particles.
 
 use crate::analysis::{self, Bin, L1};
-use crate::cases::{Reference, Scene};
+use crate::cases::{Reference, Scene, Share};
 use crate::output::conserved::ConservedCsv;
 use crate::output::energies::EnergyTrack;
 use crate::output::progress::ProgressReporter;
@@ -165,9 +165,13 @@ impl Simulation {
 }
 
 impl<C: Communicator> Simulation<C> {
-    /// Assembles the pipeline on one rank of `comm`. Every rank passes the
-    /// whole scene and keeps a contiguous share of its particles; the first
-    /// step migrates them to their owners.
+    /// Assembles the pipeline on one rank of `comm`. Each rank passes its
+    /// share of the scene ([`Case::setup_share`](crate::cases::Case::setup_share)
+    /// with this rank's [`Share`]), or the whole scene, of which it keeps
+    /// its share; the first step migrates particles to their owners.
+    ///
+    /// # Errors
+    /// A scene holding neither all particles nor this rank's share.
     pub fn with_comm(
         scene: Scene,
         kernel: Tabulated,
@@ -175,11 +179,24 @@ impl<C: Communicator> Simulation<C> {
         comm: C,
     ) -> Result<Self, AppError> {
         let mut scene = scene;
-        let total = scene.particles.len();
-        let (rank, size) = (comm.rank(), comm.size());
-        scene
-            .particles
-            .keep(total * rank / size..total * (rank + 1) / size);
+        let total = scene.total;
+        let share = Share {
+            rank: comm.rank(),
+            ranks: comm.size(),
+        };
+        let mine = share.range(total);
+        let held = scene.particles.len();
+        if held == total && mine.len() != total {
+            scene.particles.keep(mine);
+            scene.particles.shrink_to_fit();
+        } else if held != mine.len() {
+            return Err(AppError::Usage(format!(
+                "rank {} of {}: the scene holds {held} particles, neither all {total} nor this rank's share of {}",
+                share.rank,
+                share.ranks,
+                mine.len()
+            )));
+        }
         let hydro = Hydro::with_comm(
             kernel,
             scene.config,

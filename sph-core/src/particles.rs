@@ -270,6 +270,16 @@ impl Particles {
         self.nc.drain(..range.start.min(self.nc.len()));
     }
 
+    /// Returns the memory of arrays that hold more than their particles
+    /// (e.g. after [`keep`](Self::keep) of a share of a larger set).
+    pub fn shrink_to_fit(&mut self) {
+        for f in self.f64_fields_mut() {
+            f.shrink_to_fit();
+        }
+        self.id.shrink_to_fit();
+        self.nc.shrink_to_fit();
+    }
+
     /// Checks that every array holds one entry per particle and that the
     /// optional fields `needed` are present.
     ///

@@ -371,9 +371,6 @@ fn run(a: RunArgs) -> Result<(), AppError> {
     config.neighbors.ng0 = a.ng0;
     config.neighbors.ngmax = a.ngmax;
     config.timestep.k_courant = a.courant;
-    // The case applies its own scheme with what the command line overrides.
-    let scene = case.setup_with(side, config, &scheme_overrides(&a)?)?;
-    scene.config.scheme.validate()?;
     let stop = match (a.steps, a.end_time) {
         (Some(s), _) => Stop::Steps(s),
         (None, Some(t)) => Stop::Time(t),
@@ -385,7 +382,12 @@ fn run(a: RunArgs) -> Result<(), AppError> {
     let comm = sph_comm::SerialComm::new();
     let (rank, ranks) = (comm.rank(), comm.size());
     let root = rank == 0;
-    let n = scene.particles.len();
+    // The case applies its own scheme with what the command line
+    // overrides; each rank builds only its share of the particles.
+    let share = cases::Share { rank, ranks };
+    let scene = case.setup_share(side, config, &scheme_overrides(&a)?, share)?;
+    scene.config.scheme.validate()?;
+    let n = scene.total;
     if !a.quiet && root {
         eprintln!(
             "sphexa: {} with {n} particles, kernel {kernel_choice}, {ranks} rank(s) x {} threads, output in {}",

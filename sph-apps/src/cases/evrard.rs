@@ -2,9 +2,9 @@
 //! falls in under its own gravity, bounces and settles; compared with the
 //! energies of a 1-D Lagrangian reference.
 
-use super::{cube_lattice, field_set, initial_h, Case, EnergyPoint, InitialState, Physics, Scheme};
+use super::{cube_lattice, field_set, initial_h, Case, EnergyPoint, InitialState, Physics, Scheme, Share};
 use crate::AppError;
-use sph_core::{Eos, HydroConfig, Particles};
+use sph_core::{Eos, HydroConfig};
 use sph_tree::{Boundary, BoundingBox};
 
 /// The case (registered as `evrard`).
@@ -88,14 +88,19 @@ impl Case for EvrardCollapse {
     /// `[-1, 1]^3`, stretched radially (`r -> r^(3/2)`) so that the
     /// enclosed mass goes as `r^2`, i.e. `rho = 1 / (2 pi r)`; equal masses
     /// `1/N`, at rest, `u = 0.05`; h from the local density.
-    fn initial_state(&self, side: usize, config: &HydroConfig) -> Result<InitialState, AppError> {
+    fn initial_state(
+        &self,
+        side: usize,
+        config: &HydroConfig,
+        share: Share,
+    ) -> Result<InitialState, AppError> {
         let pts: Vec<[f64; 3]> = cube_lattice(side, -1.0, 2.0)
             .filter(|q| q[0] * q[0] + q[1] * q[1] + q[2] * q[2] < 1.0)
             .collect();
         let n = pts.len();
-        let mut p = Particles::new(n, field_set(config));
+        let (mut p, mine) = share.particles(n, field_set(config));
         let m = 1.0 / n as f64;
-        for (i, q) in pts.iter().enumerate() {
+        for (i, q) in pts[mine].iter().enumerate() {
             let r = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
             let s = r.sqrt(); // r^(3/2) / r
             (p.x[i], p.y[i], p.z[i]) = (q[0] * s, q[1] * s, q[2] * s);
@@ -108,6 +113,7 @@ impl Case for EvrardCollapse {
             p.u[i] = U0;
         }
         Ok(InitialState {
+            total: n,
             particles: p,
             bbox: BoundingBox::cube(-1.0, 1.0, Boundary::Open)?,
             dt0: 1e-4,

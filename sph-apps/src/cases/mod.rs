@@ -112,7 +112,15 @@ pub trait Case: Sync + std::fmt::Debug {
     /// The initial particles, box and first time step for `side` particles
     /// per side. `config` already carries the scheme (see [`Case::setup`]);
     /// use [`field_set`] for the particle fields it needs.
-    fn initial_state(&self, side: usize, config: &HydroConfig) -> Result<InitialState, AppError>;
+    /// Only the particles of `share` are built (global ids, in the case's
+    /// order): a distributed run never holds the whole initial state on
+    /// one rank.
+    fn initial_state(
+        &self,
+        side: usize,
+        config: &HydroConfig,
+        share: Share,
+    ) -> Result<InitialState, AppError>;
 
     /// The analytic solution to compare `initial` with, if any.
     fn reference(
@@ -141,8 +149,20 @@ pub trait Case: Sync + std::fmt::Debug {
     fn setup_with(
         &self,
         side: usize,
+        config: HydroConfig,
+        overrides: &SchemeOverrides,
+    ) -> Result<Scene, AppError> {
+        self.setup_share(side, config, overrides, Share::WHOLE)
+    }
+
+    /// As [`Case::setup_with`], holding only the particles of `share`
+    /// (one rank's part of a distributed run).
+    fn setup_share(
+        &self,
+        side: usize,
         mut config: HydroConfig,
         overrides: &SchemeOverrides,
+        share: Share,
     ) -> Result<Scene, AppError> {
         if side == 0 {
             return Err(AppError::Usage(format!(
@@ -151,10 +171,11 @@ pub trait Case: Sync + std::fmt::Debug {
             )));
         }
         overrides.apply(self.default_scheme(), self.physics(), &mut config);
-        let initial = self.initial_state(side, &config)?;
+        let initial = self.initial_state(side, &config, share)?;
         let reference = self.reference(side, &initial)?;
         Ok(Scene {
             case: self.name(),
+            total: initial.total,
             particles: initial.particles,
             bbox: initial.bbox,
             config,
@@ -165,10 +186,44 @@ pub trait Case: Sync + std::fmt::Debug {
     }
 }
 
+/// Which part of a case's particles a rank builds: the contiguous index
+/// range `total * rank / ranks .. total * (rank + 1) / ranks`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Share {
+    /// This rank.
+    pub rank: usize,
+    /// Ranks sharing the particles.
+    pub ranks: usize,
+}
+
+impl Share {
+    /// Every particle (one rank).
+    pub const WHOLE: Share = Share { rank: 0, ranks: 1 };
+
+    /// This share's indices of `total` particles.
+    pub fn range(&self, total: usize) -> std::ops::Range<usize> {
+        let ranks = self.ranks.max(1);
+        total * self.rank / ranks..total * (self.rank + 1) / ranks
+    }
+
+    /// Particles for this share of `total` (with `fields`), ids set to
+    /// their global indices, and that index range.
+    pub fn particles(&self, total: usize, fields: FieldSet) -> (Particles, std::ops::Range<usize>) {
+        let mine = self.range(total);
+        let mut p = Particles::new(mine.len(), fields);
+        for (id, g) in p.id.iter_mut().zip(mine.clone()) {
+            *id = g as u64;
+        }
+        (p, mine)
+    }
+}
+
 /// What a case starts from, before the scheme and references are attached.
 #[derive(Debug, Clone)]
 pub struct InitialState {
-    /// Initial particles.
+    /// Particles of all ranks together.
+    pub total: usize,
+    /// Initial particles (this rank's share).
     pub particles: Particles,
     /// Simulation box.
     pub bbox: BoundingBox,
@@ -227,7 +282,10 @@ impl Reference {
 pub struct Scene {
     /// Case name.
     pub case: &'static str,
-    /// Initial particles.
+    /// Particles of all ranks together.
+    pub total: usize,
+    /// Initial particles: all of them, or this rank's share
+    /// ([`Case::setup_share`]).
     pub particles: Particles,
     /// Simulation box.
     pub bbox: BoundingBox,

@@ -1,10 +1,10 @@
 //! Noh implosion: a sphere of radius 0.5 cut from a lattice, uniform
 //! density, falling inwards at unit speed, open boundaries.
 
-use super::{cube_lattice, field_set, initial_h, Case, InitialState, Physics, Reference, Scheme};
+use super::{cube_lattice, field_set, initial_h, Case, InitialState, Physics, Reference, Scheme, Share};
 use crate::reference::Noh;
 use crate::AppError;
-use sph_core::{Eos, HydroConfig, Particles};
+use sph_core::{Eos, HydroConfig};
 use sph_tree::{Boundary, BoundingBox};
 
 /// The case (registered as `noh`).
@@ -61,23 +61,29 @@ impl Case for NohImplosion {
 
     /// A `side^3` lattice of the cube `[-0.5, 0.5]^3` cut to the sphere,
     /// unit total mass, unit inward speed.
-    fn initial_state(&self, side: usize, config: &HydroConfig) -> Result<InitialState, AppError> {
+    fn initial_state(
+        &self,
+        side: usize,
+        config: &HydroConfig,
+        share: Share,
+    ) -> Result<InitialState, AppError> {
         let pts = sphere(side);
         let n = pts.len();
         let m = 1.0 / n as f64;
         let h0 = initial_h(config.neighbors.ng0, 1.0, side * side * side);
-        let mut p = Particles::new(n, field_set(config));
-        for (i, q) in pts.iter().enumerate() {
+        let (mut p, mine) = share.particles(n, field_set(config));
+        for (k, q) in pts[mine].iter().enumerate() {
             let r = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
-            (p.x[i], p.y[i], p.z[i]) = (q[0], q[1], q[2]);
+            (p.x[k], p.y[k], p.z[k]) = (q[0], q[1], q[2]);
             if r > 0.0 {
-                (p.vx[i], p.vy[i], p.vz[i]) = (-q[0] / r, -q[1] / r, -q[2] / r);
+                (p.vx[k], p.vy[k], p.vz[k]) = (-q[0] / r, -q[1] / r, -q[2] / r);
             }
-            p.m[i] = m;
-            p.h[i] = h0;
-            p.u[i] = U0;
+            p.m[k] = m;
+            p.h[k] = h0;
+            p.u[k] = U0;
         }
         Ok(InitialState {
+            total: n,
             particles: p,
             bbox: BoundingBox::cube(-0.5, 0.5, Boundary::Open)?,
             dt0: 1e-4,
@@ -91,7 +97,7 @@ impl Case for NohImplosion {
         side: usize,
         initial: &InitialState,
     ) -> Result<Option<Reference>, AppError> {
-        let m = 1.0 / initial.particles.len() as f64;
+        let m = 1.0 / initial.total as f64;
         let rho0 = m * (side * side * side) as f64;
         let noh = Noh::new(GAMMA, rho0, 1.0)?.with_ambient_u(U0);
         Ok(Some(Reference::Noh(noh)))

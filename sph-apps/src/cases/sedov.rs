@@ -2,10 +2,10 @@
 //! does: regular lattice in `[-0.5, 0.5]^3`, rho = 1, gamma = 5/3, E = 1
 //! deposited as a Gaussian of width 0.1, first dt = 1e-6.
 
-use super::{cube_lattice, field_set, initial_h, Case, InitialState, Physics, Reference, Scheme};
+use super::{cube_lattice, field_set, initial_h, Case, InitialState, Physics, Reference, Scheme, Share};
 use crate::reference::Sedov;
 use crate::AppError;
-use sph_core::{Eos, HydroConfig, Particles};
+use sph_core::{Eos, HydroConfig};
 use sph_tree::{Boundary, BoundingBox};
 
 /// The case (registered as `sedov`).
@@ -52,19 +52,25 @@ impl Case for SedovBlast {
     }
 
     /// `side^3` particles.
-    fn initial_state(&self, side: usize, config: &HydroConfig) -> Result<InitialState, AppError> {
+    fn initial_state(
+        &self,
+        side: usize,
+        config: &HydroConfig,
+        share: Share,
+    ) -> Result<InitialState, AppError> {
         let n = side * side * side;
-        let mut p = Particles::new(n, field_set(config));
+        let (mut p, mine) = share.particles(n, field_set(config));
         let h0 = initial_h(config.neighbors.ng0, 1.0, n);
         let norm = ENERGY / (std::f64::consts::PI.powf(1.5) * WIDTH.powi(3));
-        for (i, q) in cube_lattice(side, -0.5, 1.0).enumerate() {
-            (p.x[i], p.y[i], p.z[i]) = (q[0], q[1], q[2]);
+        for (k, q) in cube_lattice(side, -0.5, 1.0).skip(mine.start).take(mine.len()).enumerate() {
+            (p.x[k], p.y[k], p.z[k]) = (q[0], q[1], q[2]);
             let r2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2];
-            p.m[i] = 1.0 / n as f64;
-            p.h[i] = h0;
-            p.u[i] = norm * (-r2 / (WIDTH * WIDTH)).exp() + U0;
+            p.m[k] = 1.0 / n as f64;
+            p.h[k] = h0;
+            p.u[k] = norm * (-r2 / (WIDTH * WIDTH)).exp() + U0;
         }
         Ok(InitialState {
+            total: n,
             particles: p,
             bbox: BoundingBox::cube(-0.5, 0.5, Boundary::Periodic)?,
             dt0: 1e-6,

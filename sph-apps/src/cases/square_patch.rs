@@ -3,9 +3,9 @@
 //! particle's initial state, initial pressure from the incompressible
 //! Poisson series.
 
-use super::{field_set, initial_h, Case, InitialState, Physics, Scheme};
+use super::{field_set, initial_h, Case, InitialState, Physics, Scheme, Share};
 use crate::AppError;
-use sph_core::{Eos, HydroConfig, Particles};
+use sph_core::{Eos, HydroConfig};
 use sph_tree::{Boundary, BoundingBox};
 use std::f64::consts::PI;
 
@@ -80,31 +80,37 @@ impl Case for SquarePatch {
     }
 
     /// `side x side` particles per layer, `side` layers.
-    fn initial_state(&self, side: usize, config: &HydroConfig) -> Result<InitialState, AppError> {
+    fn initial_state(
+        &self,
+        side: usize,
+        config: &HydroConfig,
+        share: Share,
+    ) -> Result<InitialState, AppError> {
         let n = side * side * side;
         let dx = L / side as f64;
-        let mut p = Particles::new(n, field_set(config));
+        let (mut p, mine) = share.particles(n, field_set(config));
         let h0 = initial_h(config.neighbors.ng0, L * L * L, n);
         let m = RHO0 * L * L * L / n as f64;
-        let mut p_ref = vec![0.0; n];
-        for i in 0..n {
+        let mut p_ref = vec![0.0; mine.len()];
+        for (k, i) in mine.clone().enumerate() {
             let c = [i % side, i / side % side, i / (side * side)];
             let q = c.map(|k| -0.5 * L + (k as f64 + 0.5) * dx);
-            (p.x[i], p.y[i], p.z[i]) = (q[0], q[1], q[2]);
-            (p.vx[i], p.vy[i]) = (OMEGA * q[1], -OMEGA * q[0]);
-            p.m[i] = m;
-            p.h[i] = h0;
-            p.u[i] = 1.0;
-            p_ref[i] = initial_pressure(q[0], q[1]);
+            (p.x[k], p.y[k], p.z[k]) = (q[0], q[1], q[2]);
+            (p.vx[k], p.vy[k]) = (OMEGA * q[1], -OMEGA * q[0]);
+            p.m[k] = m;
+            p.h[k] = h0;
+            p.u[k] = 1.0;
+            p_ref[k] = initial_pressure(q[0], q[1]);
         }
         // Reference density 0 = calibrate from the first density evaluation.
-        p.eos_ref = [vec![0.0; n], p_ref];
+        p.eos_ref = [vec![0.0; mine.len()], p_ref];
         let bbox = BoundingBox::new(
             [-0.5 * L; 3],
             [0.5 * L; 3],
             [Boundary::Open, Boundary::Open, Boundary::Periodic],
         )?;
         Ok(InitialState {
+            total: n,
             particles: p,
             bbox,
             dt0: 1e-5,
