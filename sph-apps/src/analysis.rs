@@ -9,6 +9,7 @@
 //! results do not depend on the number of ranks or threads.
 
 use crate::cases::Reference;
+use nalgebra::Vector3;
 use rayon::prelude::*;
 use serde::Serialize;
 use sph_comm::{Communicator, ExactSum, ReduceOp};
@@ -29,12 +30,22 @@ pub struct L1 {
     pub v: f64,
 }
 
+/// Position of particle `i`.
+fn position(p: &Particles, i: usize) -> Vector3<f64> {
+    Vector3::new(p.x[i], p.y[i], p.z[i])
+}
+
+/// Velocity of particle `i`.
+fn velocity(p: &Particles, i: usize) -> Vector3<f64> {
+    Vector3::new(p.vx[i], p.vy[i], p.vz[i])
+}
+
 fn radius(p: &Particles, i: usize) -> f64 {
-    (p.x[i] * p.x[i] + p.y[i] * p.y[i] + p.z[i] * p.z[i]).sqrt()
+    position(p, i).norm()
 }
 
 fn speed(p: &Particles, i: usize) -> f64 {
-    (p.vx[i] * p.vx[i] + p.vy[i] * p.vy[i] + p.vz[i] * p.vz[i]).sqrt()
+    velocity(p, i).norm()
 }
 
 /// `n` exact sums over the owned particles of every rank: `add(i, sums)`
@@ -210,9 +221,9 @@ pub fn peak_density<C: Communicator>(p: &Particles, owned: Range<usize>, comm: &
 /// `[sum m |v|, sum m |x| |v|]` (exact sums).
 pub fn drift_scales<C: Communicator>(p: &Particles, owned: Range<usize>, comm: &C) -> [f64; 2] {
     let s = exact_sums(owned, 2, comm, |i, s| {
-        let v = p.vx[i].hypot(p.vy[i]).hypot(p.vz[i]);
+        let v = speed(p, i);
         s[0].add(p.m[i] * v);
-        s[1].add(p.m[i] * p.x[i].hypot(p.y[i]).hypot(p.z[i]) * v);
+        s[1].add(p.m[i] * radius(p, i) * v);
     });
     [s[0].value(), s[1].value()]
 }

@@ -302,7 +302,7 @@ impl<C: Communicator> Simulation<C> {
         let case = self.scene.case;
         let mean_step_s = totals.mean_step_s();
         let per_particle = |x: f64| x / n.max(1) as f64;
-        let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        let norm = |v: [f64; 3]| nalgebra::Vector3::from(v).norm();
         let dp = norm(std::array::from_fn(|k| {
             end.conserved.momentum[k] - first.momentum[k]
         }));
