@@ -98,10 +98,9 @@
 //! ```
 
 use crate::density::Positions;
-use crate::momentum::{Gradients, HydroState};
+use crate::momentum::{Flow, Gradients, HydroState};
 use crate::pair_loop::{
-    neighbour_lanes, sym_mat_vec, with_gradients, F64s, Group, PairLoop, PairStage, WithGradients,
-    LANES,
+    neighbour_lanes, sym_mat_vec, with_gradients, F64s, Group, PairStage, WithGradients, LANES,
 };
 use sph_kernels::Kernel;
 use sph_tree::{BoundingBox, CompactNeighborList};
@@ -254,52 +253,6 @@ fn pair_weight<K: Kernel, const IAD: bool>(kernel: &K, r: F64s, inv_h: F64s) -> 
         let r_safe = F64s::select_positive(r, r, F64s::splat(1.0));
         let w = kernel.shape_and_derivative_lanes(v).1 / r_safe;
         F64s::select_positive(r, w, zero)
-    }
-}
-
-/// What the switch stages read of every particle, cut to one length.
-struct Flow<'a, K> {
-    kernel: &'a K,
-    norm: f64,
-    support: f64,
-    h: &'a [f64],
-    m: &'a [f64],
-    v: [&'a [f64]; 3],
-    rho: &'a [f64],
-    c: &'a [f64],
-    iad: [&'a [f64]; 6],
-}
-
-impl<'a, K: Kernel> Flow<'a, K> {
-    fn new(kernel: &'a K, flow: &FlowState<'a>, iad: bool) -> Self {
-        let n = flow.pos.x.len();
-        let cut = |a: &'a [f64]| &a[..n];
-        Self {
-            kernel,
-            norm: kernel.norm(),
-            support: kernel.support(),
-            h: cut(flow.pos.h),
-            m: cut(flow.pos.m),
-            v: [cut(flow.vx), cut(flow.vy), cut(flow.vz)],
-            rho: cut(flow.rho),
-            c: if flow.c.is_empty() {
-                flow.c
-            } else {
-                cut(flow.c)
-            },
-            iad: if iad { flow.iad.map(cut) } else { [&[]; 6] },
-        }
-    }
-
-    fn driver(
-        bbox: &BoundingBox,
-        kernel: &K,
-        flow: &FlowState<'a>,
-        nl: &'a CompactNeighborList,
-    ) -> PairLoop<'a> {
-        let pos = flow.pos;
-        PairLoop::new(bbox, kernel.support(), [pos.x, pos.y, pos.z], pos.h, nl)
-            .expect("AV switches: positions")
     }
 }
 
@@ -517,41 +470,17 @@ impl<K: Kernel, const IAD: bool> Indicator<'_, K, IAD> {
     }
 }
 
-/// The indicator written out: `alpha_loc` and `v_sig` per target.
-struct ShockIndicator<'a, K, const IAD: bool>(Indicator<'a, K, IAD>);
-
-impl<K: Kernel, const IAD: bool> PairStage for ShockIndicator<'_, K, IAD> {
-    type Sums = IndicatorSums;
-    type Out<'o> = [&'o mut [f64]; 2];
-    type Stats = ();
-
-    #[inline(always)]
-    fn start(&self, g: &Group) -> IndicatorSums {
-        self.0.start(g)
-    }
-
-    #[inline(always)]
-    fn pair(&self, t: &mut IndicatorSums, j: usize, d: [F64s; 3], r2: F64s) {
-        self.0.pair(t, j, d, r2);
-    }
-
-    #[inline(always)]
-    fn finish(&self, g: &Group, t: IndicatorSums, [al, vs]: Self::Out<'_>) {
-        let (a, v) = self.0.finish(g, t);
-        al.copy_from_slice(&a[..g.valid]);
-        vs.copy_from_slice(&v[..g.valid]);
-    }
-}
-
-/// The indicator applied: `alpha` advanced over `dt` per target.
-struct AlphaUpdate<'a, K, const IAD: bool> {
+/// The indicator written out (`alpha_loc` and `v_sig` per target) or
+/// applied (`alpha` advanced over `dt` per target).
+struct IndicatorStage<'a, K, const IAD: bool> {
     indicator: Indicator<'a, K, IAD>,
     dt: f64,
 }
 
-impl<K: Kernel, const IAD: bool> PairStage for AlphaUpdate<'_, K, IAD> {
+impl<K: Kernel, const IAD: bool> PairStage for IndicatorStage<'_, K, IAD> {
     type Sums = IndicatorSums;
-    type Out<'o> = [&'o mut [f64]; 1];
+    /// `[alpha_loc, v_sig]`, or `[alpha]`.
+    type Out<'o> = (Option<[&'o mut [f64]; 2]>, Option<[&'o mut [f64]; 1]>);
     type Stats = ();
 
     #[inline(always)]
@@ -565,13 +494,19 @@ impl<K: Kernel, const IAD: bool> PairStage for AlphaUpdate<'_, K, IAD> {
     }
 
     #[inline(always)]
-    fn finish(&self, g: &Group, t: IndicatorSums, [alpha]: Self::Out<'_>) {
+    fn finish(&self, g: &Group, t: IndicatorSums, (shown, advanced): Self::Out<'_>) {
         let (alpha_loc, v_sig) = self.indicator.finish(g, t);
-        let p = &self.indicator.params;
-        let h = self.indicator.flow.h;
-        for (l, a) in alpha.iter_mut().enumerate() {
-            let tau = p.decay_time(h[g.first + l], v_sig[l]);
-            *a = p.advance(*a, alpha_loc[l], tau, self.dt);
+        if let Some([al, vs]) = shown {
+            al.copy_from_slice(&alpha_loc[..g.valid]);
+            vs.copy_from_slice(&v_sig[..g.valid]);
+        }
+        if let Some([alpha]) = advanced {
+            let p = &self.indicator.params;
+            let h = self.indicator.flow.h;
+            for (l, a) in alpha.iter_mut().enumerate() {
+                let tau = p.decay_time(h[g.first + l], v_sig[l]);
+                *a = p.advance(*a, alpha_loc[l], tau, self.dt);
+            }
         }
     }
 }
@@ -606,14 +541,13 @@ impl<K: Kernel> WithGradients for IndicatorRun<'_, K> {
             params: self.params,
         };
         let r = self.nl.targets();
-        match self.out {
+        let (dt, out) = match self.out {
             IndicatorOut::Indicator(al, vs) => {
-                driver.run(&ShockIndicator(indicator), [&mut al[r.clone()], &mut vs[r]])
+                (0.0, (Some([&mut al[r.clone()], &mut vs[r]]), None))
             }
-            IndicatorOut::Advance(alpha, dt) => {
-                driver.run(&AlphaUpdate { indicator, dt }, [&mut alpha[r]])
-            }
-        }
+            IndicatorOut::Advance(alpha, dt) => (dt, (None, Some([&mut alpha[r]]))),
+        };
+        driver.run(&IndicatorStage { indicator, dt }, out);
     }
 }
 

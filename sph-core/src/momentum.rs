@@ -22,6 +22,7 @@
 //! antisymmetric (momentum conserved to round-off), the pressure work
 //! balances the kinetic energy change exactly, and viscosity only heats.
 
+use crate::av_switch::FlowState;
 use crate::density::Positions;
 pub use crate::pair_loop::Gradients;
 use crate::pair_loop::{
@@ -202,18 +203,9 @@ impl<K: Kernel> WithGradients for MomentumRun<'_, K> {
 
     fn run<const IAD: bool>(self) -> MomentumStats {
         let (s, f) = (self.s, self.f);
-        let pos = s.pos;
-        let driver = PairLoop::new(
-            self.bbox,
-            self.kernel.support(),
-            [pos.x, pos.y, pos.z],
-            pos.h,
-            self.nl,
-        )
-        .expect("momentum: positions");
-        // Every per-particle slice cut to the same length.
+        let flow_state = FlowState::from(s);
+        let driver = Flow::driver(self.bbox, self.kernel, &flow_state, self.nl);
         let n = s.rho.len();
-        let cut = |a| cut(a, n);
         let r = self.nl.targets();
         let o = self.out;
         let out = [
@@ -222,85 +214,92 @@ impl<K: Kernel> WithGradients for MomentumRun<'_, K> {
             &mut o.az[r.clone()],
             &mut o.du[r],
         ];
-        let stage = |alpha, alpha_per| Momentum::<K, IAD, false> {
-            kernel: self.kernel,
-            norm: self.kernel.norm(),
-            support: self.kernel.support(),
-            h: cut(pos.h),
-            m: cut(pos.m),
-            v: [cut(s.vx), cut(s.vy), cut(s.vz)],
-            c: cut(s.c),
-            inv_h: cut(&f.inv_h),
-            inv_rho: cut(&f.inv_rho),
-            pre: cut(&f.pre),
-            iad: if IAD { s.iad.map(cut) } else { [&[]; 6] },
-            alpha,
-            alpha_per,
-        };
+        let flow = Flow::new(self.kernel, &flow_state, IAD);
         match self.alpha {
-            Alpha::Constant(a) => driver.run(&stage(a, &[]), out),
-            Alpha::PerParticle(a) => driver.run(&stage(0.0, cut(a)).switched(), out),
+            Alpha::Constant(a) => driver.run(&momentum::<K, IAD, false>(flow, f, n, a, &[]), out),
+            Alpha::PerParticle(a) => {
+                driver.run(&momentum::<K, IAD, true>(flow, f, n, 0.0, &a[..n]), out)
+            }
         }
     }
 }
 
-/// `a[..n]`: the per-particle slices of a stage share one length.
-#[inline]
-fn cut(a: &[f64], n: usize) -> &[f64] {
-    &a[..n]
+/// The momentum stage over `flow` with the pair factors `f` (cut to `n`).
+fn momentum<'a, K, const IAD: bool, const SWITCHED: bool>(
+    flow: Flow<'a, K>,
+    f: &'a PairFactors,
+    n: usize,
+    alpha: f64,
+    alpha_per: &'a [f64],
+) -> Momentum<'a, K, IAD, SWITCHED> {
+    Momentum {
+        flow,
+        inv_h: &f.inv_h[..n],
+        inv_rho: &f.inv_rho[..n],
+        pre: &f.pre[..n],
+        alpha,
+        alpha_per,
+    }
 }
 
 /// The momentum and energy sums; `SWITCHED` selects `alpha_ij =
 /// (alpha_per[i] + alpha_per[j]) / 2` over the constant `alpha` at compile
 /// time, `IAD` the gradient operator.
 struct Momentum<'a, K, const IAD: bool, const SWITCHED: bool> {
-    kernel: &'a K,
-    norm: f64,
-    support: f64,
-    h: &'a [f64],
-    m: &'a [f64],
-    v: [&'a [f64]; 3],
-    c: &'a [f64],
+    flow: Flow<'a, K>,
     inv_h: &'a [f64],
     inv_rho: &'a [f64],
     pre: &'a [f64],
-    iad: [&'a [f64]; 6],
     alpha: f64,
     alpha_per: &'a [f64],
 }
 
-impl<'a, K, const IAD: bool> Momentum<'a, K, IAD, false> {
-    fn switched(self) -> Momentum<'a, K, IAD, true> {
-        let Momentum {
+/// What the pair stages read of every particle, cut to one length (so
+/// one bounds check per run of neighbours covers every load).
+pub(crate) struct Flow<'a, K> {
+    pub(crate) kernel: &'a K,
+    pub(crate) norm: f64,
+    pub(crate) support: f64,
+    pub(crate) h: &'a [f64],
+    pub(crate) m: &'a [f64],
+    pub(crate) v: [&'a [f64]; 3],
+    pub(crate) rho: &'a [f64],
+    pub(crate) c: &'a [f64],
+    pub(crate) iad: [&'a [f64]; 6],
+}
+
+impl<'a, K: Kernel> Flow<'a, K> {
+    /// `flow` with its IAD matrices when `iad`.
+    pub(crate) fn new(kernel: &'a K, flow: &FlowState<'a>, iad: bool) -> Self {
+        let n = flow.pos.x.len();
+        let cut = |a: &'a [f64]| &a[..n];
+        Self {
             kernel,
-            norm,
-            support,
-            h,
-            m,
-            v,
-            c,
-            inv_h,
-            inv_rho,
-            pre,
-            iad,
-            alpha,
-            alpha_per,
-        } = self;
-        Momentum {
-            kernel,
-            norm,
-            support,
-            h,
-            m,
-            v,
-            c,
-            inv_h,
-            inv_rho,
-            pre,
-            iad,
-            alpha,
-            alpha_per,
+            norm: kernel.norm(),
+            support: kernel.support(),
+            h: cut(flow.pos.h),
+            m: cut(flow.pos.m),
+            v: [cut(flow.vx), cut(flow.vy), cut(flow.vz)],
+            rho: cut(flow.rho),
+            c: if flow.c.is_empty() {
+                flow.c
+            } else {
+                cut(flow.c)
+            },
+            iad: if iad { flow.iad.map(cut) } else { [&[]; 6] },
         }
+    }
+
+    /// The pair-loop driver over `flow`'s positions.
+    pub(crate) fn driver(
+        bbox: &BoundingBox,
+        kernel: &K,
+        flow: &FlowState<'a>,
+        nl: &'a CompactNeighborList,
+    ) -> PairLoop<'a> {
+        let pos = flow.pos;
+        PairLoop::new(bbox, kernel.support(), [pos.x, pos.y, pos.z], pos.h, nl)
+            .expect("AV switches: positions")
     }
 }
 
@@ -334,16 +333,16 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool> PairStage
     fn start(&self, g: &Group) -> MomentumSums {
         let zero = F64s::splat(0.0);
         let reach_i = {
-            let r = self.support * g.load(self.h);
+            let r = self.flow.support * g.load(self.flow.h);
             r * r
         };
         let inv_hi = g.load(self.inv_h);
-        let ci = g.load(self.c);
+        let ci = g.load(self.flow.c);
         MomentumSums {
-            vi: self.v.map(|v| g.load(v)),
+            vi: self.flow.v.map(|v| g.load(v)),
             reach_i,
             inv_hi,
-            ki3: self.norm * inv_hi * inv_hi * inv_hi,
+            ki3: self.flow.norm * inv_hi * inv_hi * inv_hi,
             ci,
             pre_i: g.load(self.pre),
             inv_rho_i: g.load(self.inv_rho),
@@ -353,7 +352,7 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool> PairStage
                 F64s::splat(self.alpha)
             },
             ci_m: if IAD {
-                self.iad.map(|c| g.load(c))
+                self.flow.iad.map(|c| g.load(c))
             } else {
                 [zero; 6]
             },
@@ -368,15 +367,15 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool> PairStage
     #[inline(always)]
     fn pair(&self, t: &mut MomentumSums, j: usize, d: [F64s; 3], r2: F64s) {
         let zero = F64s::splat(0.0);
-        let norm = self.norm;
+        let norm = self.flow.norm;
         let reach_j = {
-            let r = self.support * self.h[j];
+            let r = self.flow.support * self.flow.h[j];
             r * r
         };
         // Lanes whose target has j as neighbour get weight 1, the others
         // compute with r = 1 (finite) and weight 0.
         let (r2, weight) = neighbour_lanes(r2, t.reach_i, reach_j);
-        let mj = self.m[j] * weight;
+        let mj = self.flow.m[j] * weight;
         let inv_r = 1.0 / r2.sqrt();
         let rr = r2 * inv_r;
         let inv_hj = self.inv_h[j];
@@ -384,17 +383,17 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool> PairStage
         // A_ij(h_i), A_ij(h_j).
         let (ai, aj) = if IAD {
             // A = C (x_j - x_i) W = -(C d) W
-            let wi = t.ki3 * self.kernel.shape_lanes(rr * inv_hi);
+            let wi = t.ki3 * self.flow.kernel.shape_lanes(rr * inv_hi);
             let kj3 = norm * inv_hj * inv_hj * inv_hj;
-            let wj = kj3 * self.kernel.shape_lanes(rr * inv_hj);
-            let cj = [0, 1, 2, 3, 4, 5].map(|k| F64s::splat(self.iad[k][j]));
+            let wj = kj3 * self.flow.kernel.shape_lanes(rr * inv_hj);
+            let cj = [0, 1, 2, 3, 4, 5].map(|k| F64s::splat(self.flow.iad[k][j]));
             let cd = sym_mat_vec(&t.ci_m, d);
             let cdj = sym_mat_vec(&cj, d);
             (scale3(cd, -wi), scale3(cdj, -wj))
         } else {
             // grad_i W(r, h) = K/h^4 w'(r/h) d / r
-            let (_, dwi) = self.kernel.shape_and_derivative_lanes(rr * inv_hi);
-            let (_, dwj) = self.kernel.shape_and_derivative_lanes(rr * inv_hj);
+            let (_, dwi) = self.flow.kernel.shape_and_derivative_lanes(rr * inv_hi);
+            let (_, dwj) = self.flow.kernel.shape_and_derivative_lanes(rr * inv_hj);
             let gi = t.ki3 * inv_hi * dwi * inv_r;
             let kj4 = norm * inv_hj * inv_hj * inv_hj * inv_hj;
             let gj = kj4 * dwj * inv_r;
@@ -402,12 +401,12 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool> PairStage
         };
         let vi = t.vi;
         let vij = [
-            vi[0] - self.v[0][j],
-            vi[1] - self.v[1][j],
-            vi[2] - self.v[2][j],
+            vi[0] - self.flow.v[0][j],
+            vi[1] - self.flow.v[1][j],
+            vi[2] - self.flow.v[2][j],
         ];
         let w = (vij[0] * d[0] + vij[1] * d[1] + vij[2] * d[2]) * inv_r;
-        let vsig = t.ci + self.c[j] - 3.0 * w.min(zero);
+        let vsig = t.ci + self.flow.c[j] - 3.0 * w.min(zero);
         t.acc_vsig = t.acc_vsig.max(vsig * weight);
         let alpha_ij = if SWITCHED {
             0.5 * (t.alpha_i + self.alpha_per[j])
