@@ -18,7 +18,7 @@ use crate::timestep::TimestepParams;
 use crate::{CoreError, FieldSet, Particles};
 use rayon::prelude::*;
 use sph_comm::{Communicator, ReduceOp, SerialComm};
-use sph_domain::{Domain, DomainConfig, SyncStats};
+use sph_domain::{Domain, DomainConfig};
 use sph_gravity::{Decomposition, DistributedGravity, GravityField, GravityParams, GravityStats};
 use sph_kernels::Kernel;
 use sph_tree::{BoundingBox, CompactNeighborList, Curve, NeighborStats, Octree};
@@ -428,11 +428,6 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         self.dt_cap = dt_max;
     }
 
-    /// The last step size.
-    pub fn dt_prev(&self) -> f64 {
-        self.dt_prev
-    }
-
     /// Range of this rank's own particles in the local arrays (the rest are
     /// halos, copies of other ranks' particles).
     pub fn owned(&self) -> Range<usize> {
@@ -442,11 +437,6 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
     /// The domain decomposition.
     pub fn domain(&self) -> &Domain<C> {
         &self.domain
-    }
-
-    /// Figures of the last domain sync (particles, halos, bytes, seconds).
-    pub fn sync_stats(&self) -> SyncStats {
-        self.domain.stats()
     }
 
     /// The neighbour lists of the last step.
