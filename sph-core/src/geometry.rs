@@ -67,8 +67,8 @@ pub struct GroupSeparation {
 
 impl GroupSeparation {
     /// `a - b` for the group's lanes `a` and a partner `b` within the
-    /// reach given to [`Separation::for_group`]; lane `l` equals
-    /// [`Separation::between`] bit for bit.
+    /// reach given to [`Separation::for_group`], folded to the minimum
+    /// image on periodic axes; lane `l` is the scalar result bit for bit.
     #[inline(always)]
     pub fn between_lanes(&self, a: [F64s; 3], b: [f64; 3]) -> [F64s; 3] {
         let axis = |k: usize| {
