@@ -74,6 +74,9 @@ pub struct Summary {
     pub neighbors_mean: f64,
     /// Mean seconds per stage over steps 2..N.
     pub stage_seconds: std::collections::BTreeMap<String, f64>,
+    /// Steps whose time step each criterion set (courant, divergence,
+    /// acceleration, growth, cap).
+    pub dt_limits: std::collections::BTreeMap<String, u64>,
     /// L1 errors against the reference (if any).
     pub l1: Option<L1>,
     /// (E_end - E_0) / |E_0|.
@@ -333,6 +336,7 @@ impl<C: Communicator> Simulation<C> {
             kernel: self.kernel_name.clone(),
             neighbors_mean: neighbors_total.map_or(0.0, |t| per_particle(t as f64)),
             stage_seconds: totals.stage_seconds(),
+            dt_limits: totals.dt_limits(),
             l1: end.l1,
             energy_rel_drift: (end.conserved.e_tot() - first.e_tot()) / first.e_tot().abs(),
             momentum_rel_drift: if scale_p > 0.0 { dp / scale_p } else { dp },

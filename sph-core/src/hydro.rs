@@ -14,7 +14,7 @@ use crate::momentum::{
 };
 use crate::neighbors::{find_neighbors, NeighborParams};
 use crate::scheme::{Scheme, Viscosity};
-use crate::timestep::TimestepParams;
+use crate::timestep::{DtLimit, TimestepParams};
 use crate::{CoreError, FieldSet, Particles};
 use rayon::prelude::*;
 use sph_comm::{Communicator, ReduceOp, SerialComm};
@@ -293,6 +293,8 @@ pub struct StepReport {
     pub t: f64,
     /// The step taken.
     pub dt: f64,
+    /// The criterion that set `dt`.
+    pub dt_limit: DtLimit,
     /// Conserved quantities at `t`.
     pub conserved: Conserved,
     /// Neighbour statistics of this step over all ranks (`first_over_cap`
@@ -558,11 +560,17 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             min_h_over_vsig: ext.min_h_over_vsig,
             max_abs_div_v: ext.max_abs_div_v,
         };
-        let dt = self
+        let (dt, limit) = self
             .config
             .timestep
-            .dt(&global, ext.acc_max, self.dt_prev)
-            .min(self.dt_cap);
+            .dt_limited(&global, ext.acc_max, self.dt_prev);
+        let capped = dt.min(self.dt_cap);
+        let dt_limit = if capped < dt || dt.is_nan() {
+            DtLimit::Cap
+        } else {
+            limit
+        };
+        let dt = capped;
         self.dt_cap = f64::INFINITY;
         clock.lap(Stage::Timestep);
 
@@ -592,6 +600,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             step,
             t,
             dt,
+            dt_limit,
             conserved,
             neighbors: NeighborStats {
                 min_count: ext.nc_min as usize,

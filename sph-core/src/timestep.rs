@@ -30,11 +30,63 @@ impl Default for TimestepParams {
     }
 }
 
+/// Which criterion set a step's `dt`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum DtLimit {
+    /// Courant: `Kcour min h / v_sig`.
+    Courant,
+    /// Density change: `Krho / max |div v|`.
+    Divergence,
+    /// Acceleration: `eta sqrt(eps / max |a|)`.
+    Acceleration,
+    /// Growth limit: `max_growth * dt_prev`.
+    Growth,
+    /// A cap from outside (an output or end time).
+    Cap,
+}
+
+impl DtLimit {
+    /// Every limit, in the order above.
+    pub const ALL: [DtLimit; 5] = [
+        DtLimit::Courant,
+        DtLimit::Divergence,
+        DtLimit::Acceleration,
+        DtLimit::Growth,
+        DtLimit::Cap,
+    ];
+
+    /// Short lower-case name (for tables).
+    pub fn name(self) -> &'static str {
+        match self {
+            DtLimit::Courant => "courant",
+            DtLimit::Divergence => "divergence",
+            DtLimit::Acceleration => "acceleration",
+            DtLimit::Growth => "growth",
+            DtLimit::Cap => "cap",
+        }
+    }
+}
+
 impl TimestepParams {
     /// `dt = min(Kcour min h/v_sig, Krho / max|div v|, eta sqrt(eps/max|a|),
     /// growth * dt_prev)`, from stats already reduced over all particles
     /// (and ranks); `max_acc` is zero when the acceleration criterion is off.
     pub fn dt(&self, stats: &MomentumStats, max_acc: f64, dt_prev: f64) -> f64 {
+        self.dt_limited(stats, max_acc, dt_prev).0
+    }
+
+    /// [`dt`](Self::dt) and the criterion that set it (the first of
+    /// [`DtLimit::ALL`] on a tie).
+    ///
+    /// ```
+    /// use sph_core::momentum::MomentumStats;
+    /// use sph_core::timestep::{DtLimit, TimestepParams};
+    /// let p = TimestepParams::default();
+    /// let s = MomentumStats { min_h_over_vsig: 1.0, max_abs_div_v: 0.0 };
+    /// assert_eq!(p.dt_limited(&s, 0.0, 1.0), (0.2, DtLimit::Courant));
+    /// assert_eq!(p.dt_limited(&s, 0.0, 0.1).1, DtLimit::Growth);
+    /// ```
+    pub fn dt_limited(&self, stats: &MomentumStats, max_acc: f64, dt_prev: f64) -> (f64, DtLimit) {
         let courant = self.k_courant * stats.min_h_over_vsig;
         let div = if stats.max_abs_div_v > 0.0 {
             self.k_rho / stats.max_abs_div_v
@@ -46,6 +98,15 @@ impl TimestepParams {
         } else {
             f64::INFINITY
         };
-        courant.min(div).min(acc).min(self.max_growth * dt_prev)
+        let dt = courant.min(div).min(acc).min(self.max_growth * dt_prev);
+        let limit = [
+            (courant, DtLimit::Courant),
+            (div, DtLimit::Divergence),
+            (acc, DtLimit::Acceleration),
+        ]
+        .into_iter()
+        .find(|&(v, _)| v == dt)
+        .map_or(DtLimit::Growth, |(_, l)| l);
+        (dt, limit)
     }
 }

@@ -17,6 +17,7 @@ pub struct StageTotals {
     domain: DomainSummary,
     timed_steps: u64,
     last_total: Option<f64>,
+    limits: BTreeMap<&'static str, u64>,
 }
 
 impl StageTotals {
@@ -29,6 +30,7 @@ impl StageTotals {
             domain: DomainSummary::default(),
             timed_steps: 0,
             last_total: None,
+            limits: BTreeMap::new(),
         }
     }
 
@@ -55,6 +57,15 @@ impl StageTotals {
         }
         (self.domain.owned_min, self.domain.owned_max) = (d.owned_min, d.owned_max);
         self.last_total = Some(r.times.total());
+        *self.limits.entry(r.dt_limit.name()).or_default() += 1;
+    }
+
+    /// How many steps each time-step criterion set.
+    pub fn dt_limits(&self) -> BTreeMap<String, u64> {
+        self.limits
+            .iter()
+            .map(|(k, v)| (k.to_string(), *v))
+            .collect()
     }
 
     fn steps_div(&self) -> f64 {
@@ -112,7 +123,7 @@ impl TimingsCsv {
     pub fn create(path: &Path) -> Result<Self, AppError> {
         let mut f = CsvFile::create(path)?;
         f.line(&format!(
-            "step,{},total,owned_min,owned_max,halo_ratio,halo_ratio_max,bytes_sent,comm_s_max,sync_s_max",
+            "step,{},total,owned_min,owned_max,halo_ratio,halo_ratio_max,bytes_sent,comm_s_max,sync_s_max,dt_limit",
             STAGES.join(",")
         ))?;
         Ok(Self(f))
@@ -123,7 +134,7 @@ impl TimingsCsv {
         let times: Vec<String> = r.times.0.iter().map(|s| format!("{s:.6e}")).collect();
         let d = r.domain;
         self.0.line_fmt(format_args!(
-            "{},{},{:.6e},{},{},{:.6e},{:.6e},{},{:.6e},{:.6e}",
+            "{},{},{:.6e},{},{},{:.6e},{:.6e},{},{:.6e},{:.6e},{}",
             r.step,
             times.join(","),
             r.times.total(),
@@ -133,7 +144,8 @@ impl TimingsCsv {
             d.halo_ratio_max,
             d.bytes_sent,
             d.comm_seconds_max,
-            d.sync_seconds_max
+            d.sync_seconds_max,
+            r.dt_limit.name()
         ))
     }
 
@@ -152,7 +164,7 @@ impl TimingsCsv {
             .collect();
         let dom = totals.domain();
         self.0.line_fmt(format_args!(
-            "mean_2..N,{},{:.6e},{},{},{:.6e},{:.6e},{:.0},{:.6e},{:.6e}",
+            "mean_2..N,{},{:.6e},{},{},{:.6e},{:.6e},{:.0},{:.6e},{:.6e},",
             means.join(","),
             totals.mean_step_s(),
             dom.owned_min,
