@@ -33,7 +33,7 @@ use std::collections::HashMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use hdf5_pure::{AttrValue, DType, File, FileBuilder};
+use hdf5_pure::{AttrValue, DType, Datatype, DatatypeByteOrder, File, FileBuilder};
 
 use crate::error::IoError;
 use crate::snapshot::{Attr, BoxSpec, Field, FieldData, FieldType, Selection, Snapshot};
@@ -50,6 +50,8 @@ const A_TYPES: &str = "sph_io_types";
 const A_ATTRS: &str = "sph_io_attrs";
 const A_META: &str = "sph_io_meta_crc32";
 const A_CRC: &str = "crc32";
+/// Rows per raw read of a field (512 KiB of 8-byte values).
+const ROWS_PER_READ: u64 = 1 << 16;
 
 /// Step attribute names the layout reserves; a user attribute may not use them.
 pub const RESERVED_ATTRS: &[&str] = &[
@@ -304,17 +306,19 @@ pub(crate) fn tmp_path(path: &Path) -> PathBuf {
     path.with_file_name(name)
 }
 
+/// Opens `path` for reading: metadata and field values are read on demand,
+/// straight into their destination (no whole-file buffer).
 fn open(path: &Path) -> Result<File, IoError> {
-    let bytes = std::fs::read(path).map_err(|source| IoError::Io {
+    let is_hdf5 = hdf5_pure::is_hdf5(path).map_err(|source| IoError::Io {
         path: path.to_owned(),
         source,
     })?;
-    if !hdf5_pure::is_hdf5_bytes(&bytes) {
+    if !is_hdf5 {
         return Err(IoError::NotHdf5 {
             path: path.to_owned(),
         });
     }
-    guard(path, None, None, || File::from_bytes(bytes))
+    guard(path, None, None, || File::open_streaming(path))
 }
 
 /// Runs a decoder call, turning its error, or a panic inside it (corrupt
@@ -534,20 +538,67 @@ fn read_field(
             })
         }
     };
-    let data = match t {
-        FieldType::F64 => FieldData::F64(guard(path, at.0, at.1, || ds.read_f64())?),
-        FieldType::U64 => FieldData::U64(guard(path, at.0, at.1, || ds.read_u64())?),
+    // Little-endian 8-byte elements (what this crate writes) are read as raw
+    // bytes a window of rows at a time, checksummed and converted while the
+    // window is in cache; anything else goes through the decoder's
+    // conversions.
+    let little_endian = matches!(
+        guard(path, at.0, at.1, || ds.datatype())?,
+        Datatype::FloatingPoint {
+            size: 8,
+            byte_order: DatatypeByteOrder::LittleEndian,
+            ..
+        } | Datatype::FixedPoint {
+            size: 8,
+            byte_order: DatatypeByteOrder::LittleEndian,
+            ..
+        }
+    );
+    let short = |found: u64| IoError::WrongLength {
+        path: path.to_owned(),
+        step: gname.to_owned(),
+        field: name.to_owned(),
+        expected: n,
+        found,
     };
-    if data.len() as u64 != n {
-        return Err(IoError::WrongLength {
-            path: path.to_owned(),
-            step: gname.to_owned(),
-            field: name.to_owned(),
-            expected: n,
-            found: data.len() as u64,
-        });
-    }
-    let computed = data.crc32();
+    let (data, computed) = if little_endian {
+        let len = usize::try_from(n).map_err(|_| short(n))?;
+        let mut words: Vec<u64> = Vec::with_capacity(len);
+        let mut floats: Vec<f64> = Vec::with_capacity(if t == FieldType::F64 { len } else { 0 });
+        let mut crc = crc32fast::Hasher::new();
+        let mut start = 0u64;
+        while start < n {
+            let count = (n - start).min(ROWS_PER_READ);
+            let raw = guard(path, at.0, at.1, || ds.read_raw_rows(start, count))?;
+            if raw.len() as u64 != 8 * count {
+                return Err(short(start + raw.len() as u64 / 8));
+            }
+            crc.update(&raw);
+            let it = raw
+                .chunks_exact(8)
+                .map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes")));
+            match t {
+                FieldType::F64 => floats.extend(it.map(f64::from_bits)),
+                FieldType::U64 => words.extend(it),
+            }
+            start += count;
+        }
+        let data = match t {
+            FieldType::F64 => FieldData::F64(floats),
+            FieldType::U64 => FieldData::U64(words),
+        };
+        (data, crc.finalize())
+    } else {
+        let data = match t {
+            FieldType::F64 => FieldData::F64(guard(path, at.0, at.1, || ds.read_f64())?),
+            FieldType::U64 => FieldData::U64(guard(path, at.0, at.1, || ds.read_u64())?),
+        };
+        if data.len() as u64 != n {
+            return Err(short(data.len() as u64));
+        }
+        let crc = data.crc32();
+        (data, crc)
+    };
     if computed != stored {
         return Err(IoError::Checksum {
             path: path.to_owned(),
