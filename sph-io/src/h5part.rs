@@ -28,6 +28,22 @@
 //!
 //! Files are written to `NAME.tmp`, flushed to disk, then renamed to `NAME`:
 //! a crash leaves either the old file or the new one, never a torn one.
+//! [`SnapshotWriter::append`] does the same with a copy of the file that it
+//! extends in place by one step group (cost: one copy of the file).
+//!
+//! # Why `hdf5-pure`
+//! The default build must write and read these files with the Rust
+//! toolchain alone. `hdf5-pure` 0.47 (pure Rust, MSRV 1.89, one dependency
+//! without default features) writes groups, 1-D `f64`/`u64` datasets and
+//! scalar/array/string attributes that libhdf5 1.10 (`h5dump`, h5py) reads,
+//! edits files in place (append), reads lazily (`open_streaming`), and gave
+//! no panic on 80,000 randomly corrupted files. Measured on 1e6 particles x
+//! 10 fields (80 MB, page cache, this crate's bench): write 0.8-1.1 GB/s
+//! (including the CRC32s, the fsync and the rename), read and verify
+//! 2.4-4.6 GB/s. The C library through `hdf5-metno` 0.15 (libhdf5 1.10.8)
+//! wrote the same data at 1.4 GB/s with an fsync (2 GB/s without) and read
+//! it at about 20 GB/s: faster, but it needs libhdf5 installed, so it is
+//! left for an optional feature if output speed ever matters more.
 
 use std::collections::HashMap;
 use std::io::Write;
@@ -74,74 +90,149 @@ impl SnapshotWriter for H5Part {
         steps: &[&Snapshot],
         select: &Selection,
     ) -> Result<(), IoError> {
+        let plans = steps
+            .iter()
+            .map(|snap| plan_step(snap, select))
+            .collect::<Result<Vec<_>, _>>()?;
         let mut builder = FileBuilder::new();
-        for (k, snap) in steps.iter().enumerate() {
-            snap.validate()?;
-            let fields = selected_fields(snap, select)?;
+        for (k, plan) in plans.iter().enumerate() {
             let mut g = builder.create_group(&step_group(k));
-            for (name, value) in &snap.attrs {
-                if RESERVED_ATTRS.contains(&name.as_str()) {
-                    return Err(IoError::ReservedName { name: name.clone() });
-                }
-                g.set_attr(name, to_h5_attr(name, value)?);
+            for (name, value) in &plan.attrs {
+                g.set_attr(name, value.clone());
             }
-            let b = &snap.bbox;
-            g.set_attr(A_TIME, AttrValue::F64(snap.time));
-            g.set_attr(A_STEP, AttrValue::U64(snap.step));
-            g.set_attr(A_DT, AttrValue::F64(snap.dt));
-            g.set_attr(A_BOX, AttrValue::F64Array(box_array(b).to_vec()));
-            g.set_attr(
-                A_PERIODIC,
-                AttrValue::U8Array(b.periodic.map(u8::from).to_vec()),
-            );
-            g.set_attr(A_N, AttrValue::U64(snap.len() as u64));
-            if !fields.is_empty() {
-                let names = fields.iter().map(|f| f.name.clone()).collect();
-                let types = fields
-                    .iter()
-                    .map(|f| f.data.field_type().to_string())
-                    .collect();
-                g.set_attr(A_FIELDS, AttrValue::StringArray(names));
-                g.set_attr(A_TYPES, AttrValue::StringArray(types));
-            }
-            if !snap.attrs.is_empty() {
-                g.set_attr(
-                    A_ATTRS,
-                    AttrValue::StringArray(snap.attrs.iter().map(|(n, _)| n.clone()).collect()),
-                );
-            }
-            let table: Vec<(&str, FieldType)> = fields
-                .iter()
-                .map(|f| (f.name.as_str(), f.data.field_type()))
-                .collect();
-            let meta = meta_crc(
-                snap.step,
-                snap.time,
-                snap.dt,
-                b,
-                snap.len() as u64,
-                &table,
-                &snap.attrs,
-            );
-            g.set_attr(A_META, AttrValue::U32(meta));
-            for f in &fields {
-                let ds = g.create_dataset(&f.name);
-                match &f.data {
-                    FieldData::F64(v) => ds.with_f64_data(v),
-                    FieldData::U64(v) => ds.with_u64_data(v),
-                }
-                .set_attr(A_CRC, AttrValue::U32(f.data.crc32()));
+            for (f, crc) in &plan.fields {
+                fill_dataset(g.create_dataset(&f.name), f, *crc);
             }
             builder.add_group(g.finish());
         }
-        write_atomic(path, |w| {
-            builder.finish_to(w).map_err(|e| IoError::Format {
-                path: path.to_owned(),
-                step: None,
-                field: None,
-                what: format!("HDF5 encoder: {e}"),
+        write_atomic(path, None, |file| {
+            let mut w = std::io::BufWriter::with_capacity(1 << 20, file);
+            builder
+                .finish_to(&mut w)
+                .map_err(|e| encoder_error(path, e))?;
+            w.flush().map_err(|source| IoError::Io {
+                path: tmp_path(path),
+                source,
             })
         })
+    }
+
+    fn append(&self, path: &Path, snap: &Snapshot, select: &Selection) -> Result<usize, IoError> {
+        if !path.exists() {
+            self.write(path, snap, select)?;
+            return Ok(0);
+        }
+        let plan = plan_step(snap, select)?;
+        let k = self.step_count(path)?;
+        let gname = step_group(k);
+        write_atomic(path, Some(path), |_| {
+            let tmp = tmp_path(path);
+            let edit_error = |e: hdf5_pure::Error| IoError::Format {
+                path: path.to_owned(),
+                step: Some(gname.clone()),
+                field: None,
+                what: format!("HDF5 editor: {e}"),
+            };
+            let file = guard(&tmp, None, None, || File::open_rw(&tmp))?;
+            let root = file.root();
+            root.create_group_with(&gname, |g| {
+                for (name, value) in &plan.attrs {
+                    g.set_attr(name, value.clone());
+                }
+            })
+            .map_err(edit_error)?;
+            for (f, crc) in &plan.fields {
+                root.create_dataset(&format!("{gname}/{}", f.name), |b| fill_dataset(b, f, *crc))
+                    .map_err(edit_error)?;
+            }
+            file.commit().map_err(edit_error)
+        })?;
+        Ok(k)
+    }
+}
+
+/// What one step group holds: its attributes and its fields with their
+/// checksums.
+struct StepPlan<'a> {
+    attrs: Vec<(String, AttrValue)>,
+    fields: Vec<(&'a Field, u32)>,
+}
+
+/// Validates `snap` and lays out its step group (fields `select` names).
+fn plan_step<'a>(snap: &'a Snapshot, select: &Selection) -> Result<StepPlan<'a>, IoError> {
+    snap.validate()?;
+    let fields = selected_fields(snap, select)?;
+    let mut attrs = Vec::with_capacity(snap.attrs.len() + 10);
+    for (name, value) in &snap.attrs {
+        if RESERVED_ATTRS.contains(&name.as_str()) {
+            return Err(IoError::ReservedName { name: name.clone() });
+        }
+        attrs.push((name.clone(), to_h5_attr(name, value)?));
+    }
+    let b = &snap.bbox;
+    let mut set = |name: &str, value: AttrValue| attrs.push((name.to_owned(), value));
+    set(A_TIME, AttrValue::F64(snap.time));
+    set(A_STEP, AttrValue::U64(snap.step));
+    set(A_DT, AttrValue::F64(snap.dt));
+    set(A_BOX, AttrValue::F64Array(box_array(b).to_vec()));
+    set(
+        A_PERIODIC,
+        AttrValue::U8Array(b.periodic.map(u8::from).to_vec()),
+    );
+    set(A_N, AttrValue::U64(snap.len() as u64));
+    if !fields.is_empty() {
+        set(
+            A_FIELDS,
+            AttrValue::StringArray(fields.iter().map(|f| f.name.clone()).collect()),
+        );
+        set(
+            A_TYPES,
+            AttrValue::StringArray(
+                fields
+                    .iter()
+                    .map(|f| f.data.field_type().to_string())
+                    .collect(),
+            ),
+        );
+    }
+    if !snap.attrs.is_empty() {
+        set(
+            A_ATTRS,
+            AttrValue::StringArray(snap.attrs.iter().map(|(n, _)| n.clone()).collect()),
+        );
+    }
+    let table: Vec<(&str, FieldType)> = fields
+        .iter()
+        .map(|f| (f.name.as_str(), f.data.field_type()))
+        .collect();
+    let meta = meta_crc(
+        snap.step,
+        snap.time,
+        snap.dt,
+        b,
+        snap.len() as u64,
+        &table,
+        &snap.attrs,
+    );
+    set(A_META, AttrValue::U32(meta));
+    let fields = fields.into_iter().map(|f| (f, f.data.crc32())).collect();
+    Ok(StepPlan { attrs, fields })
+}
+
+fn fill_dataset(b: &mut hdf5_pure::DatasetBuilder, f: &Field, crc: u32) {
+    match &f.data {
+        FieldData::F64(v) => b.with_f64_data(v),
+        FieldData::U64(v) => b.with_u64_data(v),
+    }
+    .set_attr(A_CRC, AttrValue::U32(crc));
+}
+
+fn encoder_error(path: &Path, e: hdf5_pure::Error) -> IoError {
+    IoError::Format {
+        path: path.to_owned(),
+        step: None,
+        field: None,
+        what: format!("HDF5 encoder: {e}"),
     }
 }
 
@@ -270,11 +361,13 @@ fn meta_crc(
     h.finalize()
 }
 
-/// Writes through `body` into `path` + `.tmp`, syncs, then renames onto
-/// `path`; the temporary file is removed on failure.
+/// Makes `path` + `.tmp` (a copy of `copy_from`, or empty), lets `body`
+/// write into it, syncs it, then renames it onto `path`; the temporary file
+/// is removed on failure, so `path` is either as before or complete.
 fn write_atomic(
     path: &Path,
-    body: impl FnOnce(&mut std::io::BufWriter<&std::fs::File>) -> Result<(), IoError>,
+    copy_from: Option<&Path>,
+    body: impl FnOnce(&std::fs::File) -> Result<(), IoError>,
 ) -> Result<(), IoError> {
     let tmp = tmp_path(path);
     let io = |p: &Path| {
@@ -282,12 +375,20 @@ fn write_atomic(
         move |source| IoError::Io { path: p, source }
     };
     let result = (|| {
-        let file = std::fs::File::create(&tmp).map_err(io(&tmp))?;
-        let mut w = std::io::BufWriter::with_capacity(1 << 20, &file);
-        body(&mut w)?;
-        w.flush().map_err(io(&tmp))?;
-        drop(w);
+        let file = match copy_from {
+            Some(src) => {
+                std::fs::copy(src, &tmp).map_err(io(src))?;
+                std::fs::OpenOptions::new()
+                    .read(true)
+                    .write(true)
+                    .open(&tmp)
+                    .map_err(io(&tmp))?
+            }
+            None => std::fs::File::create(&tmp).map_err(io(&tmp))?,
+        };
+        body(&file)?;
         file.sync_all().map_err(io(&tmp))?;
+        drop(file);
         std::fs::rename(&tmp, path).map_err(io(path))
     })();
     if result.is_err() {

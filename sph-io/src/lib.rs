@@ -63,6 +63,11 @@ pub trait SnapshotWriter {
         select: &Selection,
     ) -> Result<(), IoError>;
 
+    /// Adds `snap` as the next step group of the file at `path` (creating
+    /// the file if there is none) and returns the group's index. The file is
+    /// replaced only once the new one is complete.
+    fn append(&self, path: &Path, snap: &Snapshot, select: &Selection) -> Result<usize, IoError>;
+
     /// Writes one snapshot (step group 0) into a new file at `path`.
     fn write(&self, path: &Path, snap: &Snapshot, select: &Selection) -> Result<(), IoError> {
         self.write_steps(path, &[snap], select)

@@ -42,9 +42,10 @@ fn fixture() -> &'static Fixture {
         .set_field("id", FieldData::U64((1000..1020).collect()));
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("s.h5");
-        H5Part
-            .write_steps(&path, &[&a, &b], &Selection::All)
-            .unwrap();
+        // Step 1 is appended (an in-place edit of a copy), so damage to
+        // both file shapes is exercised.
+        H5Part.write(&path, &a, &Selection::All).unwrap();
+        H5Part.append(&path, &b, &Selection::All).unwrap();
         let bytes = std::fs::read(&path).unwrap();
         let mut payload = Vec::new();
         for s in [&a, &b] {

@@ -134,3 +134,71 @@ fn fields_longer_than_a_read_window_round_trip() {
         "{e}"
     );
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
+
+    /// Appending steps one at a time gives the same snapshots as writing
+    /// them together.
+    #[test]
+    fn appended_steps_round_trip_bitwise(snaps in prop::collection::vec(common::snapshot(3, 20), 1..5)) {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("run.h5");
+        for (k, s) in snaps.iter().enumerate() {
+            prop_assert_eq!(H5Part.append(&path, s, &Selection::All).unwrap(), k);
+        }
+        let back = H5Part.read_all(&path, &Selection::All).unwrap();
+        prop_assert_eq!(back.len(), snaps.len());
+        for (a, b) in snaps.iter().zip(&back) {
+            prop_assert!(a.bits_eq(b));
+        }
+        prop_assert!(!dir.path().join("run.h5.tmp").exists());
+    }
+}
+
+/// Many steps in one file (past the 8 links a compact group holds), each
+/// with more than 8 attributes, appended to a file written whole.
+#[test]
+fn many_appended_steps() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("run.h5");
+    let mut all: Vec<Snapshot> = (0..3)
+        .map(|k| {
+            let mut s = common::sample(10 + k);
+            s.step = k as u64;
+            s
+        })
+        .collect();
+    H5Part
+        .write_steps(&path, &all.iter().collect::<Vec<_>>(), &Selection::All)
+        .unwrap();
+    for k in 3..20 {
+        let mut s = common::sample(5 + k);
+        s.step = k as u64;
+        s.time = k as f64 * 0.01;
+        for a in 0..6 {
+            s.set_attr(&format!("setting{a}"), sph_io::Attr::F64(a as f64));
+        }
+        assert_eq!(
+            H5Part
+                .append(&path, &s, &Selection::names(&["id", "x"]))
+                .unwrap(),
+            k
+        );
+        let mut kept = s.clone();
+        kept.fields.retain(|f| f.name != "y");
+        kept.fields.reverse();
+        all.push(kept);
+    }
+    let back = H5Part.read_all(&path, &Selection::All).unwrap();
+    assert_eq!(back.len(), 20);
+    for (a, b) in all.iter().zip(&back) {
+        assert!(a.bits_eq(b), "step {}", a.step);
+    }
+    // An invalid snapshot leaves the file as it was.
+    let mut bad = common::sample(4);
+    bad.set_field("short", FieldData::U64(vec![1]));
+    assert!(H5Part.append(&path, &bad, &Selection::All).is_err());
+    assert_eq!(H5Part.step_count(&path).unwrap(), 20);
+    assert!(!dir.path().join("run.h5.tmp").exists());
+}
