@@ -173,3 +173,48 @@ fn a_tiny_sedov_run_writes_its_outputs() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("sedov: 512 particles, 2 steps"), "{stdout}");
 }
+
+#[test]
+fn unknown_scheme_is_named_with_the_presets() {
+    let e = refused(&["sedov", "--scheme", "sph-ve", "--steps", "1", "-q"]);
+    let mut words = vec!["--scheme", "sph-ve"];
+    words.extend(sph_core::PRESETS.iter().map(|p| p.0));
+    assert_mentions(&e, &words);
+}
+
+/// `conserved.csv` of a tiny Sedov run with `extra` options.
+fn tiny_sedov(name: &str, extra: &[&str]) -> String {
+    let dir = scratch(name).join("out");
+    let mut args = vec!["run", "sedov", "-n", "8", "--steps", "3", "-q", "--out"];
+    args.push(dir.to_str().expect("UTF-8 path"));
+    args.extend_from_slice(extra);
+    let out = sphexa(&args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "sphexa {args:?} failed: {stderr}");
+    std::fs::read_to_string(dir.join("conserved.csv")).expect("conserved.csv")
+}
+
+#[test]
+fn a_scheme_preset_is_its_options() {
+    let preset = tiny_sedov("preset-noh", &["--scheme", "noh"]);
+    let options = tiny_sedov(
+        "options-noh",
+        &[
+            "--gradients",
+            "kernel",
+            "--av-switches",
+            "on",
+            "--alpha",
+            "0.7",
+        ],
+    );
+    let default = tiny_sedov("preset-default", &[]);
+    assert_eq!(preset, options, "--scheme noh differs from its options");
+    assert_ne!(preset, default, "--scheme noh changed nothing");
+    // An option after the preset overrides it.
+    let overridden = tiny_sedov(
+        "preset-paper-alpha",
+        &["--scheme", "noh", "--gradients", "iad"],
+    );
+    assert_ne!(overridden, preset);
+}
