@@ -529,6 +529,33 @@ struct IndicatorRun<'a, K> {
     out: IndicatorOut<'a>,
 }
 
+impl<'a, K: Kernel> IndicatorRun<'a, K> {
+    fn new(
+        kernel: &'a K,
+        bbox: &'a BoundingBox,
+        flow: FlowState<'a>,
+        div_v: &'a [f64],
+        params: &AvSwitchParams,
+        nl: &'a CompactNeighborList,
+        out: IndicatorOut<'a>,
+    ) -> Self {
+        Self {
+            kernel,
+            bbox,
+            flow,
+            div_v,
+            params: *params,
+            nl,
+            out,
+        }
+    }
+
+    /// Runs the pass with the gradient operator `g`.
+    fn with(self, g: Gradients) {
+        with_gradients(g, self);
+    }
+}
+
 impl<K: Kernel> WithGradients for IndicatorRun<'_, K> {
     type Output = ();
 
@@ -577,16 +604,8 @@ pub fn shock_indicator<K: Kernel>(
     alpha_loc: &mut [f64],
     v_sig: &mut [f64],
 ) {
-    let run = IndicatorRun {
-        kernel,
-        bbox,
-        flow,
-        div_v,
-        params: *params,
-        nl,
-        out: IndicatorOut::Indicator(alpha_loc, v_sig),
-    };
-    with_gradients(gradients, run);
+    let out = IndicatorOut::Indicator(alpha_loc, v_sig);
+    IndicatorRun::new(kernel, bbox, flow, div_v, params, nl, out).with(gradients);
 }
 
 /// Advances the viscosity strength of every target of `nl` over the time
@@ -618,14 +637,6 @@ pub fn update_alpha<K: Kernel>(
     alpha: &mut [f64],
 ) {
     assert!(params.is_valid(), "invalid AV switch parameters {params:?}");
-    let run = IndicatorRun {
-        kernel,
-        bbox,
-        flow,
-        div_v,
-        params: *params,
-        nl,
-        out: IndicatorOut::Advance(alpha, dt),
-    };
-    with_gradients(gradients, run);
+    let out = IndicatorOut::Advance(alpha, dt);
+    IndicatorRun::new(kernel, bbox, flow, div_v, params, nl, out).with(gradients);
 }

@@ -2,7 +2,7 @@
 //! falls in under its own gravity, bounces and settles; compared with the
 //! energies of a 1-D Lagrangian reference.
 
-use super::{cube_lattice, field_set, initial_h, Case, EnergyPoint, InitialState, Physics, Scheme, Share};
+use super::{Listing, cube_lattice, field_set, initial_h, Case, EnergyPoint, InitialState, Physics, Scheme, Share};
 use crate::AppError;
 use sph_core::{Eos, HydroConfig};
 use sph_tree::{Boundary, BoundingBox};
@@ -56,20 +56,13 @@ pub const ENERGIES: [EnergyPoint; 4] = [
 ];
 
 impl Case for EvrardCollapse {
-    fn name(&self) -> &'static str {
-        "evrard"
-    }
-
-    fn description(&self) -> &'static str {
-        "Evrard collapse of a self-gravitating gas sphere vs reference energies"
-    }
-
-    fn default_side(&self) -> usize {
-        30
-    }
-
-    fn default_end_time(&self) -> f64 {
-        2.0
+    fn listing(&self) -> Listing {
+        Listing {
+            name: "evrard",
+            description: "Evrard collapse of a self-gravitating gas sphere vs reference energies",
+            side: 30,
+            end_time: 2.0,
+        }
     }
 
     fn default_scheme(&self) -> Scheme {

@@ -89,16 +89,27 @@ pub fn lookup(name: &str) -> Result<&'static dyn Case, AppError> {
 /// [`setup_with`]: Case::setup_with
 pub trait Case: Sync + std::fmt::Debug {
     /// Name on the command line (lower case, words joined by `-`).
-    fn name(&self) -> &'static str;
+    fn name(&self) -> &'static str {
+        self.listing().name
+    }
+
+    /// What the case is called and runs by default.
+    fn listing(&self) -> Listing;
 
     /// One line for listings.
-    fn description(&self) -> &'static str;
+    fn description(&self) -> &'static str {
+        self.listing().description
+    }
 
     /// Default particles per side of the initial lattice.
-    fn default_side(&self) -> usize;
+    fn default_side(&self) -> usize {
+        self.listing().side
+    }
 
     /// Default end time.
-    fn default_end_time(&self) -> f64;
+    fn default_end_time(&self) -> f64 {
+        self.listing().end_time
+    }
 
     /// The scheme the case runs with unless overridden.
     fn default_scheme(&self) -> Scheme;
@@ -216,6 +227,20 @@ impl Share {
         }
         (p, mine)
     }
+}
+
+/// A case's name, one-line description and defaults (for listings and
+/// for runs that do not say otherwise).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Listing {
+    /// Name on the command line (lower case, words joined by `-`).
+    pub name: &'static str,
+    /// One line for listings.
+    pub description: &'static str,
+    /// Default particles per side of the initial lattice.
+    pub side: usize,
+    /// Default end time.
+    pub end_time: f64,
 }
 
 /// What a case starts from, before the scheme and references are attached.
@@ -374,6 +399,16 @@ mod tests {
                 case.energies().map(<[EnergyPoint]>::len)
             );
         }
+    }
+
+    #[test]
+    fn the_default_gas_is_the_one_the_references_assume() {
+        let gas = sph_core::Eos::IdealGas {
+            gamma: sedov::GAMMA,
+        };
+        assert_eq!(lookup("sedov").unwrap().physics().eos, gas);
+        let gas = sph_core::Eos::IdealGas { gamma: noh::GAMMA };
+        assert_eq!(lookup("noh").unwrap().physics().eos, gas);
     }
 
     #[test]

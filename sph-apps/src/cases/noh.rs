@@ -1,10 +1,10 @@
 //! Noh implosion: a sphere of radius 0.5 cut from a lattice, uniform
 //! density, falling inwards at unit speed, open boundaries.
 
-use super::{cube_lattice, field_set, initial_h, Case, InitialState, Physics, Reference, Scheme, Share};
+use super::{Listing, cube_lattice, field_set, initial_h, Case, InitialState, Reference, Scheme, Share};
 use crate::reference::Noh;
 use crate::AppError;
-use sph_core::{Eos, HydroConfig};
+use sph_core::HydroConfig;
 use sph_tree::{Boundary, BoundingBox};
 
 /// The case (registered as `noh`).
@@ -21,7 +21,7 @@ pub struct NohImplosion;
 /// undershoots (40 rho0).
 pub const SCHEME: Scheme = Scheme::NOH;
 
-/// Adiabatic index.
+/// Adiabatic index (that of the default gas, [`super::Physics::IDEAL_GAS`]).
 pub const GAMMA: f64 = 5.0 / 3.0;
 /// Radius of the sphere.
 pub const RADIUS: f64 = 0.5;
@@ -29,35 +29,21 @@ pub const RADIUS: f64 = 0.5;
 pub const U0: f64 = 1e-6;
 
 impl Case for NohImplosion {
-    fn name(&self) -> &'static str {
-        "noh"
-    }
-
-    fn description(&self) -> &'static str {
-        "Noh implosion of a cold sphere vs the exact solution (64x compression)"
-    }
-
     /// The default lattice, 37^3 cut to the sphere, holds 26745 particles:
     /// as many as a 30^3 cube.
-    fn default_side(&self) -> usize {
-        37
-    }
-
-    fn default_end_time(&self) -> f64 {
-        0.3
+    fn listing(&self) -> Listing {
+        Listing {
+            name: "noh",
+            description: "Noh implosion of a cold sphere vs the exact solution (64x compression)",
+            side: 37,
+            end_time: 0.3,
+        }
     }
 
     fn default_scheme(&self) -> Scheme {
         SCHEME
     }
 
-    /// An ideal gas with [`GAMMA`], no gravity.
-    fn physics(&self) -> Physics {
-        Physics {
-            eos: Eos::IdealGas { gamma: GAMMA },
-            softening: None,
-        }
-    }
 
     /// A `side^3` lattice of the cube `[-0.5, 0.5]^3` cut to the sphere,
     /// unit total mass, unit inward speed.

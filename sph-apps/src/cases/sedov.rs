@@ -2,10 +2,10 @@
 //! does: regular lattice in `[-0.5, 0.5]^3`, rho = 1, gamma = 5/3, E = 1
 //! deposited as a Gaussian of width 0.1, first dt = 1e-6.
 
-use super::{cube_lattice, field_set, initial_h, Case, InitialState, Physics, Reference, Scheme, Share};
+use super::{Listing, cube_lattice, field_set, initial_h, Case, InitialState, Reference, Scheme, Share};
 use crate::reference::Sedov;
 use crate::AppError;
-use sph_core::{Eos, HydroConfig};
+use sph_core::HydroConfig;
 use sph_tree::{Boundary, BoundingBox};
 
 /// The case (registered as `sedov`).
@@ -18,24 +18,17 @@ pub const WIDTH: f64 = 0.1;
 pub const ENERGY: f64 = 1.0;
 /// Ambient specific internal energy.
 pub const U0: f64 = 1e-8;
-/// Adiabatic index.
+/// Adiabatic index (that of the default gas, [`super::Physics::IDEAL_GAS`]).
 pub const GAMMA: f64 = 5.0 / 3.0;
 
 impl Case for SedovBlast {
-    fn name(&self) -> &'static str {
-        "sedov"
-    }
-
-    fn description(&self) -> &'static str {
-        "Sedov-Taylor blast wave in a periodic box vs the similarity solution"
-    }
-
-    fn default_side(&self) -> usize {
-        30
-    }
-
-    fn default_end_time(&self) -> f64 {
-        0.05
+    fn listing(&self) -> Listing {
+        Listing {
+            name: "sedov",
+            description: "Sedov-Taylor blast wave in a periodic box vs the similarity solution",
+            side: 30,
+            end_time: 0.05,
+        }
     }
 
     /// The paper's scheme.
@@ -43,13 +36,6 @@ impl Case for SedovBlast {
         Scheme::PAPER
     }
 
-    /// An ideal gas with [`GAMMA`], no gravity.
-    fn physics(&self) -> Physics {
-        Physics {
-            eos: Eos::IdealGas { gamma: GAMMA },
-            softening: None,
-        }
-    }
 
     /// `side^3` particles.
     fn initial_state(

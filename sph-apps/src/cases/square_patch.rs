@@ -3,7 +3,7 @@
 //! particle's initial state, initial pressure from the incompressible
 //! Poisson series.
 
-use super::{field_set, initial_h, Case, InitialState, Physics, Scheme, Share};
+use super::{Listing, field_set, initial_h, Case, InitialState, Physics, Scheme, Share};
 use crate::AppError;
 use sph_core::{Eos, HydroConfig};
 use sph_tree::{Boundary, BoundingBox};
@@ -49,20 +49,13 @@ pub fn initial_pressure(x: f64, y: f64) -> f64 {
 }
 
 impl Case for SquarePatch {
-    fn name(&self) -> &'static str {
-        "square-patch"
-    }
-
-    fn description(&self) -> &'static str {
-        "Rotating square patch (stiff Tait EOS, free surface); checks angular momentum"
-    }
-
-    fn default_side(&self) -> usize {
-        20
-    }
-
-    fn default_end_time(&self) -> f64 {
-        0.05
+    fn listing(&self) -> Listing {
+        Listing {
+            name: "square-patch",
+            description: "Rotating square patch (stiff Tait EOS, free surface); checks angular momentum",
+            side: 20,
+            end_time: 0.05,
+        }
     }
 
     /// The paper's scheme.
