@@ -24,6 +24,7 @@
 
 pub mod analysis;
 pub mod cases;
+pub mod memory;
 pub mod output;
 pub mod plot;
 pub mod reference;

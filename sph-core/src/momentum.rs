@@ -93,6 +93,8 @@ impl PairFactors {
     pub fn fill(&mut self, s: &HydroState<'_>) {
         let n = s.rho.len();
         for v in [&mut self.inv_h, &mut self.inv_rho, &mut self.pre] {
+            // Grow to what the particles need, not to twice the old size.
+            v.reserve_exact(n.saturating_sub(v.len()));
             v.resize(n, 0.0);
         }
         (

@@ -270,6 +270,27 @@ impl Particles {
         self.nc.drain(..range.start.min(self.nc.len()));
     }
 
+    /// Makes room for `additional` more particles in every array, growing
+    /// each to the new length plus 1/32 (so that the next steps' halo
+    /// counts, which vary by a few percent, fit without reallocating)
+    /// instead of doubling it as repeated pushes would. Arrays that already
+    /// have room are left alone.
+    pub fn reserve(&mut self, additional: usize) {
+        let want = self.len() + additional;
+        let room = |cap: usize, len: usize| (cap < want).then(|| want + want / 32 - len);
+        for f in self.f64_fields_mut() {
+            if let Some(extra) = room(f.capacity(), f.len()) {
+                f.reserve_exact(extra);
+            }
+        }
+        if let Some(extra) = room(self.id.capacity(), self.id.len()) {
+            self.id.reserve_exact(extra);
+        }
+        if let Some(extra) = room(self.nc.capacity(), self.nc.len()) {
+            self.nc.reserve_exact(extra);
+        }
+    }
+
     /// Returns the memory of arrays that hold more than their particles
     /// (e.g. after [`keep`](Self::keep) of a share of a larger set).
     pub fn shrink_to_fit(&mut self) {
@@ -424,6 +445,10 @@ impl ParticleFields for Particles {
 
     fn keep(&mut self, range: Range<usize>) {
         Particles::keep(self, range);
+    }
+
+    fn reserve(&mut self, additional: usize) {
+        Particles::reserve(self, additional);
     }
 
     fn reorder(&mut self, perm: &[u32], scratch: &mut Vec<u64>) {

@@ -241,6 +241,7 @@ impl<C: Communicator> Domain<C> {
             let received = self.comm.sparse_exchange(&sends)?;
             comm_s += t.elapsed().as_secs_f64();
             p.keep(lo..hi);
+            p.reserve(received.iter().map(|(_, b)| b.len() / words.max(1)).sum());
             for (_, buf) in &received {
                 for chunk in buf.chunks_exact(words) {
                     p.push_packed(chunk);
@@ -267,6 +268,7 @@ impl<C: Communicator> Domain<C> {
             comm_s += t.elapsed().as_secs_f64();
             let words = p.packed_words();
             let mut recv_ranks = Vec::with_capacity(received.len());
+            p.reserve(received.iter().map(|(_, b)| b.len() / words.max(1)).sum());
             for (r, buf) in &received {
                 recv_ranks.push((*r, buf.len() / words.max(1)));
                 for chunk in buf.chunks_exact(words) {

@@ -29,6 +29,13 @@ pub trait ParticleFields {
     fn pack(&self, i: usize, out: &mut Vec<u64>);
     /// Appends one particle from `packed_words()` words.
     fn push_packed(&mut self, words: &[u64]);
+    /// Makes room for `additional` more particles before a run of
+    /// [`push_packed`](Self::push_packed). The domain calls it with the exact
+    /// count of arrivals, so a container can grow its arrays to what they
+    /// will hold instead of doubling them. Does nothing by default.
+    fn reserve(&mut self, additional: usize) {
+        let _ = additional;
+    }
     /// Keeps only the particles in `range` (in order).
     fn keep(&mut self, range: Range<usize>);
     /// Reorders every field: `new[i] = old[perm[i]]`.

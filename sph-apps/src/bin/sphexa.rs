@@ -227,6 +227,7 @@ fn parse_kernel(s: &str) -> Result<KernelChoice, String> {
 }
 
 fn main() -> ExitCode {
+    sph_apps::memory::return_large_buffers_to_os();
     let cli = Cli::parse();
     match cli.command {
         Command::Cases => {
