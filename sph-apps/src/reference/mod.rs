@@ -2,15 +2,18 @@
 //!
 //! - [`Sedov`]: the Sedov-Taylor point blast (Kamm & Timmes 2007, standard case).
 //! - [`Noh`]: the Noh implosion (exact, piecewise closed form).
+//! - [`Riemann`]: the exact Riemann problem (shock tubes such as Sod's).
 //!
-//! Both return a [`FlowState`] at a radius and a time; the constructors validate their
+//! Each returns a [`FlowState`] at a radius (a position along the tube) and a time; the constructors validate their
 //! parameters and report a [`ReferenceError`] naming the bad value.
 
 mod noh;
 mod quadrature;
+mod riemann;
 mod sedov;
 
 pub use noh::Noh;
+pub use riemann::{GasState, Riemann, Waves};
 pub use sedov::Sedov;
 
 /// The fluid state of a reference solution at one radius and time.
@@ -88,6 +91,25 @@ pub enum ReferenceError {
         /// The rejected speed.
         v0: f64,
     },
+
+    /// A pressure that is not finite and positive.
+    #[error("pressure P = {p} is not allowed: it must be finite and > 0")]
+    InvalidPressure {
+        /// The rejected pressure.
+        p: f64,
+    },
+
+    /// A velocity that is not finite.
+    #[error("velocity v = {v} is not allowed: it must be finite")]
+    InvalidVelocity {
+        /// The rejected velocity.
+        v: f64,
+    },
+
+    /// The two states of a Riemann problem move apart fast enough to open
+    /// a vacuum between them, which this solver does not model.
+    #[error("the two states separate faster than 2/(gamma-1) (c_L + c_R): a vacuum forms; use states closer in velocity")]
+    Vacuum,
 }
 
 /// Rejects an adiabatic index that is not a finite number above 1.
