@@ -26,7 +26,8 @@ pub struct L1 {
     pub rho: f64,
     /// Pressure.
     pub p: f64,
-    /// Speed (|v| against the reference's |v_r|).
+    /// Speed (|v| against the reference's |v_r|; for a tube the signed
+    /// velocity along it, see [`Reference::flow_speed`]).
     pub v: f64,
 }
 
@@ -46,6 +47,22 @@ fn radius(p: &Particles, i: usize) -> f64 {
 
 fn speed(p: &Particles, i: usize) -> f64 {
     velocity(p, i).norm()
+}
+
+/// Particle `i`'s coordinate of `reference` (the radius without one).
+fn coordinate(reference: Option<&Reference>, p: &Particles, i: usize) -> f64 {
+    match reference {
+        Some(rf) => rf.coordinate(position(p, i).into()),
+        None => radius(p, i),
+    }
+}
+
+/// Particle `i`'s speed as `reference` compares it (`|v|` without one).
+fn flow_speed(reference: Option<&Reference>, p: &Particles, i: usize) -> f64 {
+    match reference {
+        Some(rf) => rf.flow_speed(position(p, i).into(), velocity(p, i).into()),
+        None => speed(p, i),
+    }
 }
 
 /// `n` exact sums over the owned particles of every rank: `add(i, sums)`
@@ -92,10 +109,10 @@ pub fn l1<C: Communicator>(
 ) -> L1 {
     let n = count(owned.clone(), comm).max(1) as f64;
     let s = exact_sums(owned, 3, comm, |i, s| {
-        let r = reference.state(radius(p, i), t);
+        let r = reference.state(coordinate(Some(reference), p, i), t);
         s[0].add((p.rho[i] - r.rho).abs());
         s[1].add((p.p[i] - r.p).abs());
-        s[2].add((speed(p, i) - r.v.abs()).abs());
+        s[2].add((flow_speed(Some(reference), p, i) - reference.reference_speed(&r)).abs());
     });
     L1 {
         rho: s[0].value() / n,
@@ -137,7 +154,7 @@ pub fn radial_profile<C: Communicator>(
     nbins: usize,
 ) -> Vec<Bin> {
     let dr = r_max / nbins as f64;
-    let bin = |i: usize| Some((radius(p, i) / dr) as usize).filter(|&k| k < nbins);
+    let bin = |i: usize| Some((coordinate(reference, p, i) / dr) as usize).filter(|&k| k < nbins);
     let mut counts = vec![0usize; nbins];
     for k in owned.clone().filter_map(bin) {
         counts[k] += 1;
@@ -147,7 +164,7 @@ pub fn radial_profile<C: Communicator>(
         if let Some(k) = bin(i) {
             s[3 * k].add(p.rho[i]);
             s[3 * k + 1].add(p.p[i]);
-            s[3 * k + 2].add(speed(p, i));
+            s[3 * k + 2].add(flow_speed(reference, p, i));
         }
     });
     counts
@@ -168,7 +185,10 @@ pub fn radial_profile<C: Communicator>(
                 v: mean(&s[2]),
                 rho_ref: refs.map_or(nan, |x| x.rho),
                 p_ref: refs.map_or(nan, |x| x.p),
-                v_ref: refs.map_or(nan, |x| x.v.abs()),
+                v_ref: match (reference, refs) {
+                    (Some(rf), Some(x)) => rf.reference_speed(&x),
+                    _ => nan,
+                },
             }
         })
         .collect()
@@ -182,17 +202,32 @@ pub fn peak_radius(bins: &[Bin]) -> f64 {
         .map_or(f64::NAN, |b| b.r)
 }
 
-/// Mean density of all ranks' particles with radius in `[r0, r1)` (NaN if
-/// there are none).
+/// The outermost coordinate where the binned density falls through
+/// `level` (a front moving into thinner gas), linearly interpolated between
+/// the bin centres on either side; NaN if no bin reaches `level`.
+pub fn front_position(bins: &[Bin], level: f64) -> f64 {
+    let filled: Vec<&Bin> = bins.iter().filter(|b| b.count > 0).collect();
+    match filled.iter().rposition(|b| b.rho >= level) {
+        None => f64::NAN,
+        Some(k) if k + 1 == filled.len() => filled[k].r,
+        Some(k) => {
+            let (a, b) = (filled[k], filled[k + 1]);
+            a.r + (a.rho - level) / (a.rho - b.rho) * (b.r - a.r)
+        }
+    }
+}
+
+/// Mean density of all ranks' particles with `reference`'s coordinate (the
+/// radius without one) in `[r0, r1)` (NaN if there are none).
 pub fn mean_density_in_shell<C: Communicator>(
     p: &Particles,
     owned: Range<usize>,
     comm: &C,
-    r0: f64,
-    r1: f64,
+    reference: Option<&Reference>,
+    [r0, r1]: [f64; 2],
 ) -> f64 {
     let inside = |i: usize| {
-        let r = radius(p, i);
+        let r = coordinate(reference, p, i);
         r >= r0 && r < r1
     };
     let c = comm.all_reduce_scalar(owned.clone().filter(|&i| inside(i)).count(), ReduceOp::Sum);

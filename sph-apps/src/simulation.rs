@@ -430,9 +430,37 @@ impl<C: Communicator> Simulation<C> {
             ),
             Some(Reference::Noh(nh)) => {
                 let rs = nh.shock_radius(t);
-                let shell =
-                    analysis::mean_density_in_shell(p, owned.clone(), comm, 0.3 * rs, 0.8 * rs);
+                let shell = analysis::mean_density_in_shell(
+                    p,
+                    owned.clone(),
+                    comm,
+                    reference,
+                    [0.3 * rs, 0.8 * rs],
+                );
                 (None, Some(rs), Some(shell), Some(nh.shocked_density()))
+            }
+            Some(Reference::Tube(tube)) => {
+                // The shock where the binned density passes half-way from
+                // the outer gas to the shocked gas; the plateau is the
+                // middle half of the shocked gas (contact to shock).
+                let rho_outer = tube.riemann.state(1.0, 0.0).rho;
+                let rho_shocked = tube.riemann.rho_star().1;
+                let level = 0.5 * (rho_outer + rho_shocked);
+                let (contact, shock) = (tube.contact_position(t), tube.shock_position(t));
+                let gap = shock - contact;
+                let shell = analysis::mean_density_in_shell(
+                    p,
+                    owned.clone(),
+                    comm,
+                    reference,
+                    [contact + 0.25 * gap, shock - 0.25 * gap],
+                );
+                (
+                    Some(analysis::front_position(&bins, level)),
+                    Some(shock),
+                    Some(shell),
+                    Some(rho_shocked),
+                )
             }
             None => (None, None, None, None),
         };

@@ -19,7 +19,7 @@
 //! assert!(cases::lookup("sedov-taylor").is_err());
 //! ```
 
-use crate::reference::{FlowState, Noh, Sedov};
+use crate::reference::{FlowState, Noh, Riemann, Sedov};
 use crate::AppError;
 use sph_core::{FieldSet, HydroConfig, Particles};
 use sph_tree::BoundingBox;
@@ -43,6 +43,7 @@ registry! {
     noh::NohImplosion,
     square_patch::SquarePatch,
     evrard::EvrardCollapse,
+    sod::SodTube,
 }
 
 /// Every case, in listing order (the same as [`CASES`]).
@@ -275,29 +276,94 @@ pub struct EnergyPoint {
     pub e_grav: f64,
 }
 
-/// A radially symmetric analytic solution to compare against.
+/// An analytic solution to compare against, a function of one coordinate
+/// ([`Reference::coordinate`]): the radius for the spherical solutions,
+/// `|x|` for the doubled shock tube.
 #[derive(Debug, Clone)]
 pub enum Reference {
     /// Sedov-Taylor blast wave centred at the origin.
     Sedov(Sedov),
     /// Noh implosion centred at the origin.
     Noh(Noh),
+    /// Doubled periodic shock tube along x ([`Tube`]).
+    Tube(Tube),
+}
+
+/// A doubled shock tube: the `left` gas of a Riemann problem fills
+/// `|x| < interface`, the `right` gas the rest of a periodic box along x,
+/// so there are two mirror-image Riemann problems, at `x = +interface` and
+/// `x = -interface`. Folded onto `s = |x|` (velocity `sign(x) v_x`) both
+/// are the one problem at `s = interface`, until their waves meet.
+#[derive(Debug, Clone)]
+pub struct Tube {
+    /// The problem at `x = +interface` (left gas inside).
+    pub riemann: Riemann,
+    /// Where the two gases meet at t = 0.
+    pub interface: f64,
+}
+
+impl Tube {
+    /// Position of the shock (into the outer gas) at `t`, in `s = |x|`.
+    pub fn shock_position(&self, t: f64) -> f64 {
+        self.interface + self.riemann.waves().right_head * t
+    }
+
+    /// Position of the contact at `t`, in `s = |x|`.
+    pub fn contact_position(&self, t: f64) -> f64 {
+        self.interface + self.riemann.v_star() * t
+    }
 }
 
 impl Reference {
-    /// State at radius `r` and time `t`; `v` is the radial velocity.
+    /// The coordinate the solution depends on: the distance from the
+    /// origin, or `|x|` for the tube.
+    pub fn coordinate(&self, pos: [f64; 3]) -> f64 {
+        match self {
+            Reference::Sedov(_) | Reference::Noh(_) => nalgebra::Vector3::from(pos).norm(),
+            Reference::Tube(_) => pos[0].abs(),
+        }
+    }
+
+    /// The particle speed compared with [`Reference::reference_speed`]:
+    /// `|v|` for the spherical solutions, `sign(x) v_x` for the tube.
+    pub fn flow_speed(&self, pos: [f64; 3], vel: [f64; 3]) -> f64 {
+        match self {
+            Reference::Sedov(_) | Reference::Noh(_) => nalgebra::Vector3::from(vel).norm(),
+            Reference::Tube(_) => {
+                if pos[0] < 0.0 {
+                    -vel[0]
+                } else {
+                    vel[0]
+                }
+            }
+        }
+    }
+
+    /// The reference's speed at a state: `|v_r|` for the spherical
+    /// solutions, the signed velocity along the folded tube.
+    pub fn reference_speed(&self, state: &FlowState) -> f64 {
+        match self {
+            Reference::Sedov(_) | Reference::Noh(_) => state.v.abs(),
+            Reference::Tube(_) => state.v,
+        }
+    }
+
+    /// State at coordinate `r` and time `t`; `v` is the velocity along
+    /// the coordinate.
     pub fn state(&self, r: f64, t: f64) -> FlowState {
         match self {
             Reference::Sedov(s) => s.state(r, t),
             Reference::Noh(n) => n.state(r, t),
+            Reference::Tube(tube) => tube.riemann.state(r - tube.interface, t),
         }
     }
 
-    /// Shock radius at `t`.
+    /// Shock radius (the tube: shock position in `|x|`) at `t`.
     pub fn shock_radius(&self, t: f64) -> f64 {
         match self {
             Reference::Sedov(s) => s.shock_radius(t),
             Reference::Noh(n) => n.shock_radius(t),
+            Reference::Tube(tube) => tube.shock_position(t),
         }
     }
 }
