@@ -98,8 +98,9 @@ pub fn count<C: Communicator>(owned: Range<usize>, comm: &C) -> usize {
     comm.all_reduce_scalar(owned.len(), ReduceOp::Sum)
 }
 
-/// `1/N sum_i |f_i - f_ref(r_i)|` over all particles of all ranks, for rho,
-/// P and |v|.
+/// `1/N sum_i |f_i - f_ref(r_i)|` over the particles of all ranks that
+/// the reference covers ([`Reference::covers`]: all but a vortex's
+/// corners), for rho, P and the speed.
 pub fn l1<C: Communicator>(
     p: &Particles,
     owned: Range<usize>,
@@ -107,9 +108,15 @@ pub fn l1<C: Communicator>(
     reference: &Reference,
     t: f64,
 ) -> L1 {
-    let n = count(owned.clone(), comm).max(1) as f64;
+    let covered = |i: usize| reference.covers(coordinate(Some(reference), p, i));
+    let local = owned.clone().filter(|&i| covered(i)).count();
+    let n = comm.all_reduce_scalar(local, ReduceOp::Sum).max(1) as f64;
     let s = exact_sums(owned, 3, comm, |i, s| {
-        let r = reference.state(coordinate(Some(reference), p, i), t);
+        let x = coordinate(Some(reference), p, i);
+        if !reference.covers(x) {
+            return;
+        }
+        let r = reference.state(x, t);
         s[0].add((p.rho[i] - r.rho).abs());
         s[1].add((p.p[i] - r.p).abs());
         s[2].add((flow_speed(Some(reference), p, i) - reference.reference_speed(&r)).abs());

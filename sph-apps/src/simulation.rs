@@ -462,7 +462,7 @@ impl<C: Communicator> Simulation<C> {
                     Some(rho_shocked),
                 )
             }
-            None => (None, None, None, None),
+            Some(Reference::Vortex(_)) | None => (None, None, None, None),
         };
         Ok(EndState {
             t,

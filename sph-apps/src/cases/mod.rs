@@ -19,7 +19,7 @@
 //! assert!(cases::lookup("sedov-taylor").is_err());
 //! ```
 
-use crate::reference::{FlowState, Noh, Riemann, Sedov};
+use crate::reference::{FlowState, Gresho, Noh, Riemann, Sedov};
 use crate::AppError;
 use sph_core::{FieldSet, HydroConfig, Particles};
 use sph_tree::BoundingBox;
@@ -44,6 +44,7 @@ registry! {
     square_patch::SquarePatch,
     evrard::EvrardCollapse,
     sod::SodTube,
+    gresho::GreshoVortex,
 }
 
 /// Every case, in listing order (the same as [`CASES`]).
@@ -287,7 +288,15 @@ pub enum Reference {
     Noh(Noh),
     /// Doubled periodic shock tube along x ([`Tube`]).
     Tube(Tube),
+    /// A stationary vortex about the z axis: the coordinate is the
+    /// cylindrical radius, the speed `v_phi`; compared out to
+    /// [`VORTEX_EXTENT`].
+    Vortex(Gresho),
 }
+
+/// Cylindrical radius out to which a vortex's L1 errors are taken (the
+/// half-width of the box: the corners are at rest and would dilute them).
+pub const VORTEX_EXTENT: f64 = 0.5;
 
 /// A doubled shock tube: the `left` gas of a Riemann problem fills
 /// `|x| < interface`, the `right` gas the rest of a periodic box along x,
@@ -321,6 +330,15 @@ impl Reference {
         match self {
             Reference::Sedov(_) | Reference::Noh(_) => nalgebra::Vector3::from(pos).norm(),
             Reference::Tube(_) => pos[0].abs(),
+            Reference::Vortex(_) => pos[0].hypot(pos[1]),
+        }
+    }
+
+    /// Whether a particle at `coordinate` enters the L1 errors.
+    pub fn covers(&self, coordinate: f64) -> bool {
+        match self {
+            Reference::Vortex(_) => coordinate <= VORTEX_EXTENT,
+            _ => true,
         }
     }
 
@@ -336,6 +354,14 @@ impl Reference {
                     vel[0]
                 }
             }
+            Reference::Vortex(_) => {
+                let r = pos[0].hypot(pos[1]);
+                if r > 0.0 {
+                    (pos[0] * vel[1] - pos[1] * vel[0]) / r
+                } else {
+                    0.0
+                }
+            }
         }
     }
 
@@ -344,7 +370,7 @@ impl Reference {
     pub fn reference_speed(&self, state: &FlowState) -> f64 {
         match self {
             Reference::Sedov(_) | Reference::Noh(_) => state.v.abs(),
-            Reference::Tube(_) => state.v,
+            Reference::Tube(_) | Reference::Vortex(_) => state.v,
         }
     }
 
@@ -355,15 +381,18 @@ impl Reference {
             Reference::Sedov(s) => s.state(r, t),
             Reference::Noh(n) => n.state(r, t),
             Reference::Tube(tube) => tube.riemann.state(r - tube.interface, t),
+            Reference::Vortex(g) => g.state(r),
         }
     }
 
-    /// Shock radius (the tube: shock position in `|x|`) at `t`.
-    pub fn shock_radius(&self, t: f64) -> f64 {
+    /// Shock radius (the tube: shock position in `|x|`) at `t`; `None`
+    /// for a flow without shock.
+    pub fn shock_radius(&self, t: f64) -> Option<f64> {
         match self {
-            Reference::Sedov(s) => s.shock_radius(t),
-            Reference::Noh(n) => n.shock_radius(t),
-            Reference::Tube(tube) => tube.shock_position(t),
+            Reference::Sedov(s) => Some(s.shock_radius(t)),
+            Reference::Noh(n) => Some(n.shock_radius(t)),
+            Reference::Tube(tube) => Some(tube.shock_position(t)),
+            Reference::Vortex(_) => None,
         }
     }
 }

@@ -3,15 +3,18 @@
 //! - [`Sedov`]: the Sedov-Taylor point blast (Kamm & Timmes 2007, standard case).
 //! - [`Noh`]: the Noh implosion (exact, piecewise closed form).
 //! - [`Riemann`]: the exact Riemann problem (shock tubes such as Sod's).
+//! - [`Gresho`]: the Gresho-Chan vortex (stationary).
 //!
 //! Each returns a [`FlowState`] at a radius (a position along the tube) and a time; the constructors validate their
 //! parameters and report a [`ReferenceError`] naming the bad value.
 
+mod gresho;
 mod noh;
 mod quadrature;
 mod riemann;
 mod sedov;
 
+pub use gresho::Gresho;
 pub use noh::Noh;
 pub use riemann::{GasState, Riemann, Waves};
 pub use sedov::Sedov;
@@ -97,6 +100,13 @@ pub enum ReferenceError {
     InvalidPressure {
         /// The rejected pressure.
         p: f64,
+    },
+
+    /// A radius that is not finite and positive.
+    #[error("radius r = {r} is not allowed: it must be finite and > 0")]
+    InvalidRadius {
+        /// The rejected radius.
+        r: f64,
     },
 
     /// A velocity that is not finite.
