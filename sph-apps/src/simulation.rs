@@ -437,7 +437,16 @@ impl<C: Communicator> Simulation<C> {
                     reference,
                     [0.3 * rs, 0.8 * rs],
                 );
-                (None, Some(rs), Some(shell), Some(nh.shocked_density()))
+                // The shock where the binned density passes half-way from
+                // the inflow just outside it to the shocked gas.
+                let post = nh.shocked_density();
+                let level = 0.5 * (nh.state(rs * (1.0 + 1e-9), t).rho + post);
+                (
+                    Some(analysis::front_position(&bins, level)),
+                    Some(rs),
+                    Some(shell),
+                    Some(post),
+                )
             }
             Some(Reference::Tube(tube)) => {
                 // The shock where the binned density passes half-way from
