@@ -41,7 +41,9 @@
 //! ```
 
 mod error;
+pub mod foreign;
 pub mod h5part;
+pub mod slab;
 mod snapshot;
 
 use std::path::Path;
