@@ -65,7 +65,7 @@ const A_FIELDS: &str = "sph_io_fields";
 const A_TYPES: &str = "sph_io_types";
 const A_ATTRS: &str = "sph_io_attrs";
 const A_META: &str = "sph_io_meta_crc32";
-const A_CRC: &str = "crc32";
+pub(crate) const A_CRC: &str = "crc32";
 /// Rows per raw read of a field (512 KiB of 8-byte values).
 const ROWS_PER_READ: u64 = 1 << 16;
 
@@ -222,7 +222,7 @@ pub(crate) fn step_attrs(
     Ok(attrs)
 }
 
-pub(crate) fn fill_dataset(b: &mut hdf5_pure::DatasetBuilder, f: &Field, crc: u32) {
+fn fill_dataset(b: &mut hdf5_pure::DatasetBuilder, f: &Field, crc: u32) {
     match &f.data {
         FieldData::F64(v) => b.with_f64_data(v),
         FieldData::U64(v) => b.with_u64_data(v),

@@ -203,17 +203,20 @@ fn create_layout_at(
     for (k, (name, t)) in table.iter().enumerate() {
         let parts: Vec<PartialCrc> = slabs.iter().map(|s| s.fields[k].2).collect();
         let crc = combine_crcs(&parts);
-        // Zeros from a zeroed allocation: the pages are not touched until
-        // the encoder reads them, and the sink below skips zero runs.
-        let data = match t {
-            FieldType::F64 => FieldData::F64(vec![0.0; len]),
-            FieldType::U64 => FieldData::U64(vec![0; len]),
+        // Zero bytes from a zeroed allocation, handed over as they are: no
+        // page is written (the kernel maps untouched pages to its zero
+        // page), so rank 0 never holds the values, and the sink below turns
+        // the zero runs into holes of the file.
+        let bytes = len
+            .checked_mul(8)
+            .ok_or_else(|| bad(format!("{n} rows do not fit in memory")))?;
+        let dtype = match t {
+            FieldType::F64 => hdf5_pure::make_f64_type(),
+            FieldType::U64 => hdf5_pure::make_u64_type(),
         };
-        let field = crate::Field {
-            name: (*name).to_owned(),
-            data,
-        };
-        h5part::fill_dataset(g.create_dataset(name), &field, crc);
+        g.create_dataset(name)
+            .with_raw_data(dtype, vec![0u8; bytes], n)
+            .set_attr(h5part::A_CRC, hdf5_pure::AttrValue::U32(crc));
     }
     builder.add_group(g.finish());
     let io = |source| IoError::Io {
