@@ -445,3 +445,40 @@ fn an_sphexa_layout_file_is_read_as_initial_conditions() {
     ]);
     assert!(e.contains("'u'") && e.contains("no_u.h5"), "{e}");
 }
+
+/// Every registered case (AV switches, self-gravity with an open box that
+/// grows, a referenced equation of state, conductivity) restarts to the
+/// bit: 6 steps against 3 + restart + 3.
+#[test]
+fn every_case_restarts_bit_identically() {
+    for case in sph_apps::cases::names() {
+        let dir = scratch(&format!("case-{case}"));
+        let (a, b) = (dir.join("a"), dir.join("b"));
+        let run = |out: &Path, steps: &str| {
+            ok(&[
+                case,
+                "-n",
+                "8",
+                "-q",
+                "--checkpoint-every",
+                "3",
+                "--steps",
+                steps,
+                "--out",
+                s(out),
+            ]);
+        };
+        run(&a, "6");
+        run(&b, "3");
+        let ckpt = b.join("checkpoints/checkpoint_00000003.h5");
+        ok(&["--restart", s(&ckpt), "--steps", "6", "-q"]);
+        let conserved = |d: &Path| std::fs::read_to_string(d.join("conserved.csv")).unwrap();
+        assert_eq!(conserved(&a).lines().count(), 7, "{case}");
+        assert!(
+            conserved(&a) == conserved(&b),
+            "{case}: conserved.csv differs"
+        );
+        let file = "checkpoints/checkpoint_00000006.h5";
+        assert_same_state(&read(&a.join(file)), &read(&b.join(file)), case);
+    }
+}
