@@ -482,3 +482,65 @@ fn every_case_restarts_bit_identically() {
         assert_same_state(&read(&a.join(file)), &read(&b.join(file)), case);
     }
 }
+
+/// One of our own snapshots (default fields) starts a case: the first line
+/// of conserved.csv holds the kinetic and internal energy of the file's
+/// particles, summed here from the file.
+#[test]
+fn our_snapshot_is_read_as_initial_conditions() {
+    let dir = scratch("init-ours");
+    let first = dir.join("first");
+    ok(&[
+        "sedov",
+        "-n",
+        "8",
+        "--steps",
+        "4",
+        "-q",
+        "--snapshot-every-steps",
+        "4",
+        "--out",
+        s(&first),
+    ]);
+    let file = first.join("snapshots/snapshot_00000004.h5");
+    let snap = read(&file);
+    let f = |n: &str| snap.field(n).and_then(FieldData::as_f64).unwrap().to_vec();
+    let (m, u) = (f("m"), f("u"));
+    let (vx, vy, vz) = (f("vx"), f("vy"), f("vz"));
+    let e_kin: f64 = (0..m.len())
+        .map(|i| 0.5 * m[i] * (vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i]))
+        .sum();
+    let e_int: f64 = (0..m.len()).map(|i| m[i] * u[i]).sum();
+    assert!(e_kin > 0.0, "the blast has started moving");
+    let second = dir.join("second");
+    ok(&[
+        "sedov",
+        "--init",
+        s(&file),
+        "--steps",
+        "1",
+        "-q",
+        "--out",
+        s(&second),
+    ]);
+    let text = std::fs::read_to_string(second.join("conserved.csv")).unwrap();
+    let row: Vec<f64> = text
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .map(|x| x.parse().unwrap())
+        .collect();
+    // step, t, dt, E_kin, E_int, ...: time starts at 0 again.
+    assert_eq!((row[0], row[1]), (1.0, 0.0));
+    assert!(
+        (row[3] / e_kin - 1.0).abs() < 1e-12,
+        "E_kin {} vs {e_kin}",
+        row[3]
+    );
+    assert!(
+        (row[4] / e_int - 1.0).abs() < 1e-12,
+        "E_int {} vs {e_int}",
+        row[4]
+    );
+}

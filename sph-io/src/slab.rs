@@ -34,6 +34,15 @@
 //! without any rank reading all of it. So a file written by N ranks is read
 //! by M ranks, whatever N and M.
 
+//!
+//! # Measured
+//! 1e6 particles x 12 fields (11 `f64` + `u64` ids; 96,003,747 bytes, 96.0
+//! bytes per particle), `sph-apps` example `snapshot_io`, 2 shared cores
+//! (load 4-5 from other builds), local disk: write (layout, rows, fsync,
+//! rename; slowest rank) 0.11-0.19 s = 510-870 MB/s on 1 rank, 0.20-0.39 s
+//! = 250-480 MB/s on 2 ranks; read with checksum verification (page cache)
+//! 0.012-0.09 s = 1.0-8.1 GB/s on 1 rank, 0.03-0.11 s = 0.9-3.0 GB/s on 2.
+
 use std::io::{Seek, SeekFrom, Write};
 use std::ops::Range;
 use std::path::Path;
