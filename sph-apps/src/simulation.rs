@@ -139,7 +139,9 @@ pub enum CheckpointEvery {
     Steps(u64),
     /// After the first step reaching each multiple of this simulated time.
     Time(f64),
-    /// When this many wall-clock seconds have passed since the last one.
+    /// When this many wall-clock seconds have passed since the last one
+    /// (the ranks agree through one max-reduction per step, the only
+    /// collective the schedules add; `Auto` likewise).
     Wall(f64),
     /// Young/Daly: every sqrt(2 C M) seconds of wall-clock time, with C the
     /// measured time of the last checkpoint (the first is written after

@@ -204,7 +204,8 @@ struct RunArgs {
     /// given here override it (a changed physics option makes the
     /// continuation differ from the run that wrote it). --steps and
     /// --end-time count from the run's start, not from the checkpoint.
-    /// conserved.csv in --out keeps its lines up to the checkpoint.
+    /// conserved.csv in --out keeps its lines up to the checkpoint;
+    /// timings.csv and summary.json cover the continued part.
     #[arg(long, value_name = "FILE[:STEP]", conflicts_with = "init")]
     restart: Option<String>,
     /// Start the case from the particles of snapshot FILE (Step#K, default
