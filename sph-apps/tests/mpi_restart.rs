@@ -109,3 +109,86 @@ fn written_on_two_ranks_restarted_on_one_and_four() {
         );
     }
 }
+
+/// Initial conditions from files on several ranks, each rank reading its
+/// share: an SPH-EXA-layout file (no checksums) and one of our snapshots
+/// give on 2 ranks the conserved quantities of the serial run.
+#[test]
+fn initial_conditions_from_files_on_two_ranks() {
+    use hdf5_pure::{AttrValue, FileBuilder};
+    let root = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("mpi-init");
+    std::fs::remove_dir_all(&root).ok();
+    std::fs::create_dir_all(&root).unwrap();
+    let scene = sph_apps::cases::lookup("sedov")
+        .unwrap()
+        .setup(12, sph_core::HydroConfig::default())
+        .unwrap();
+    let p = &scene.particles;
+    let mut b = FileBuilder::new();
+    let mut g = b.create_group("Step#0");
+    g.set_attr("time", AttrValue::F64(0.0));
+    g.set_attr(
+        "box",
+        AttrValue::F64Array(vec![-0.5, 0.5, -0.5, 0.5, -0.5, 0.5]),
+    );
+    for (name, v) in [
+        ("x", &p.x),
+        ("y", &p.y),
+        ("z", &p.z),
+        ("h", &p.h),
+        ("m", &p.m),
+        ("u", &p.u),
+    ] {
+        g.create_dataset(name).with_f64_data(v);
+    }
+    b.add_group(g.finish());
+    let foreign = root.join("sphexa.h5");
+    std::fs::write(&foreign, b.finish().unwrap()).unwrap();
+    let dir = |n: &str| root.join(n).to_str().expect("UTF-8").to_owned();
+    let conserved = |n: &str| std::fs::read_to_string(root.join(n).join("conserved.csv")).unwrap();
+    let foreign = foreign.to_str().unwrap();
+    for ranks in [1, 2] {
+        let out = dir(&format!("foreign-{ranks}"));
+        mpirun(
+            ranks,
+            &[
+                "sedov",
+                "--init",
+                foreign,
+                "--steps",
+                "5",
+                "-q",
+                "--threads",
+                "1",
+                "--snapshot-every-steps",
+                "5",
+                "--out",
+                &out,
+            ],
+        );
+    }
+    assert_eq!(conserved("foreign-1").lines().count(), 6);
+    assert_eq!(conserved("foreign-1"), conserved("foreign-2"));
+    let ours = root.join("foreign-2/snapshots/snapshot_00000005.h5");
+    let ours = ours.to_str().unwrap();
+    for ranks in [1, 2] {
+        let out = dir(&format!("ours-{ranks}"));
+        mpirun(
+            ranks,
+            &[
+                "sedov",
+                "--init",
+                ours,
+                "--steps",
+                "3",
+                "-q",
+                "--threads",
+                "1",
+                "--out",
+                &out,
+            ],
+        );
+    }
+    assert_eq!(conserved("ours-1").lines().count(), 4);
+    assert_eq!(conserved("ours-1"), conserved("ours-2"));
+}
