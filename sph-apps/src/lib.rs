@@ -24,6 +24,7 @@
 
 pub mod analysis;
 pub mod cases;
+pub mod checkpoint;
 pub mod memory;
 pub mod output;
 pub mod plot;
@@ -63,6 +64,9 @@ pub enum AppError {
     /// A bad reference-solution parameter.
     #[error(transparent)]
     Reference(#[from] reference::ReferenceError),
+    /// A snapshot or checkpoint file could not be written or read.
+    #[error(transparent)]
+    Snapshot(#[from] sph_io::IoError),
 }
 
 impl AppError {

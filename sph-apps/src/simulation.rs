@@ -11,13 +11,15 @@ use crate::cases::{Reference, Scene, Share};
 use crate::output::conserved::ConservedCsv;
 use crate::output::energies::EnergyTrack;
 use crate::output::progress::ProgressReporter;
+use crate::output::snapshot::{self as snapfile, Schedule};
 use crate::output::timings::{StageTotals, TimingsCsv};
 use crate::output::{particles, profile, summary};
-use crate::AppError;
+use crate::{checkpoint, AppError};
 use serde::Serialize;
 use sph_comm::{Communicator, ReduceOp, SerialComm};
-use sph_core::{Conserved, Hydro};
+use sph_core::{Conserved, Hydro, RunState};
 use sph_domain::DomainConfig;
+use sph_io::{Attr, Snapshot};
 use sph_kernels::Tabulated;
 use std::path::Path;
 use std::time::Instant;
@@ -108,6 +110,59 @@ pub struct Summary {
     /// Energies against the case's reference table (times up to t_end;
     /// the run's values interpolated linearly between steps).
     pub energies: Vec<EnergyCheck>,
+    /// Snapshot and checkpoint files written (absent when none were asked
+    /// for).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub io: Option<IoSummary>,
+}
+
+/// The snapshot and checkpoint files of a run.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct IoSummary {
+    /// Snapshot files written.
+    pub snapshots: u64,
+    /// Mean seconds per snapshot file (the slowest rank's).
+    pub snapshot_seconds_mean: f64,
+    /// Checkpoint files written.
+    pub checkpoints: u64,
+    /// Mean seconds per checkpoint file (the slowest rank's).
+    pub checkpoint_seconds_mean: f64,
+    /// With `--checkpoint-every auto`: the last interval chosen,
+    /// sqrt(2 C M) seconds of wall-clock time.
+    pub checkpoint_interval_s: Option<f64>,
+}
+
+/// When checkpoints are written.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum CheckpointEvery {
+    /// After every step whose number is a multiple of this.
+    Steps(u64),
+    /// After the first step reaching each multiple of this simulated time.
+    Time(f64),
+    /// When this many wall-clock seconds have passed since the last one
+    /// (the ranks agree through one max-reduction per step, the only
+    /// collective the schedules add; `Auto` likewise).
+    Wall(f64),
+    /// Young/Daly: every sqrt(2 C M) seconds of wall-clock time, with C the
+    /// measured time of the last checkpoint (the first is written after
+    /// step 1 to measure it) and M the mean time between failures, seconds.
+    Auto {
+        /// Mean time between failures, seconds.
+        mtbf_s: f64,
+    },
+}
+
+/// Snapshot and checkpoint outputs of a run (none by default).
+#[derive(Debug, Clone, Default)]
+pub struct Outputs {
+    /// Snapshot fields (`x`, `rho`, ...; see
+    /// [`crate::output::snapshot::BASE_FIELDS`]) and schedule.
+    pub snapshots: Option<(Vec<String>, Schedule)>,
+    /// Checkpoint schedule and how many of this run's checkpoints to keep
+    /// (older ones are deleted once a newer one is complete; 0 keeps all).
+    pub checkpoints: Option<(CheckpointEvery, usize)>,
+    /// Attributes of every snapshot and checkpoint (the run's settings).
+    pub attrs: Vec<(String, Attr)>,
 }
 
 /// The run's energies at a reference time, beside the reference values.
@@ -157,6 +212,8 @@ pub struct Simulation<C: Communicator = SerialComm> {
     kernel_name: String,
     total: usize,
     write_particles: bool,
+    outputs: Outputs,
+    resumed_at: Option<u64>,
 }
 
 impl Simulation {
@@ -181,6 +238,31 @@ impl<C: Communicator> Simulation<C> {
         kernel_name: String,
         comm: C,
     ) -> Result<Self, AppError> {
+        Self::build(scene, kernel, kernel_name, comm, None)
+    }
+
+    /// Continues a run from a checkpoint: `scene` holds the checkpoint's
+    /// particles (this rank's share, with their integrator history, see
+    /// [`checkpoint::particles`]) and box, `state` its run state. Steps,
+    /// time and every output go on from there; `conserved.csv` in the
+    /// output folder keeps its lines up to the checkpoint's step.
+    pub fn resume(
+        scene: Scene,
+        kernel: Tabulated,
+        kernel_name: String,
+        comm: C,
+        state: RunState,
+    ) -> Result<Self, AppError> {
+        Self::build(scene, kernel, kernel_name, comm, Some(state))
+    }
+
+    fn build(
+        scene: Scene,
+        kernel: Tabulated,
+        kernel_name: String,
+        comm: C,
+        resume: Option<RunState>,
+    ) -> Result<Self, AppError> {
         let mut scene = scene;
         let total = scene.total;
         let share = Share {
@@ -200,22 +282,53 @@ impl<C: Communicator> Simulation<C> {
                 mine.len()
             )));
         }
-        let hydro = Hydro::with_comm(
-            kernel,
-            scene.config,
-            0.0,
-            scene.dt0,
-            comm,
-            DomainConfig::default(),
-        )?;
-        hydro.prepare(&mut scene.particles);
+        let (t0, dt0) = resume.map_or((0.0, scene.dt0), |s| (s.t, s.dt_prev));
+        let mut hydro =
+            Hydro::with_comm(kernel, scene.config, t0, dt0, comm, DomainConfig::default())?;
+        match resume {
+            Some(state) => hydro.restore_run_state(state),
+            None => hydro.prepare(&mut scene.particles),
+        }
         Ok(Self {
             scene,
             hydro,
             kernel_name,
             total,
             write_particles: false,
+            outputs: Outputs::default(),
+            resumed_at: resume.map(|s| s.step),
         })
+    }
+
+    /// Snapshot and checkpoint outputs (none by default).
+    ///
+    /// # Errors
+    /// A snapshot field this run does not have, named with those it has.
+    pub fn set_outputs(&mut self, outputs: Outputs) -> Result<(), AppError> {
+        if let Some((fields, _)) = &outputs.snapshots {
+            let p = &self.scene.particles;
+            for name in fields {
+                if snapfile::field(p, 0..0, name).is_none() {
+                    let have: Vec<&str> = snapfile::BASE_FIELDS
+                        .iter()
+                        .chain(snapfile::OPTIONAL_FIELDS)
+                        .copied()
+                        .filter(|n| snapfile::field(p, 0..0, n).is_some())
+                        .collect();
+                    return Err(AppError::Usage(format!(
+                        "--snapshot-fields: this run has no field '{name}' (its scheme does not use it); it has: {}",
+                        have.join(",")
+                    )));
+                }
+            }
+        }
+        self.outputs = outputs;
+        Ok(())
+    }
+
+    /// The run state of the pipeline (steps done, time, last step).
+    pub fn run_state(&self) -> RunState {
+        self.hydro.run_state()
     }
 
     /// The scene (this rank's particles at the current state, halos
@@ -249,8 +362,12 @@ impl<C: Communicator> Simulation<C> {
         let mut logs = None;
         if root {
             std::fs::create_dir_all(out).map_err(|e| AppError::io(out, e))?;
+            let path = out.join("conserved.csv");
             logs = Some((
-                ConservedCsv::create(&out.join("conserved.csv"))?,
+                match self.resumed_at {
+                    Some(step) => ConservedCsv::resume(&path, step)?,
+                    None => ConservedCsv::create(&path)?,
+                },
                 TimingsCsv::create(&out.join("timings.csv"))?,
             ));
         }
@@ -262,6 +379,16 @@ impl<C: Communicator> Simulation<C> {
         let mut energies = EnergyTrack::new();
         let mut fallbacks = 0;
         let mut neighbors_total = None;
+        let t0 = match self.resumed_at {
+            Some(_) => self.hydro.time(),
+            None => f64::NEG_INFINITY,
+        };
+        let mut files = FileOutputs::new(&self.outputs, out, t0);
+        if files.any() && root {
+            for dir in [files.snapshot_dir.as_path(), files.checkpoint_dir.as_path()] {
+                std::fs::create_dir_all(dir).map_err(|e| AppError::io(dir, e))?;
+            }
+        }
         loop {
             let t = self.hydro.time();
             let steps = self.hydro.steps();
@@ -286,6 +413,14 @@ impl<C: Communicator> Simulation<C> {
             }
             bar.update(&r, self.hydro.time());
             neighbors_total = Some(r.neighbors.total);
+            if files.any() && self.write_files(&mut files)? {
+                // The lines up to a checkpoint are on disk with it, so a
+                // run killed later resumes them (ConservedCsv::resume).
+                if let Some((conserved, timings)) = logs.as_mut() {
+                    conserved.flush()?;
+                    timings.flush()?;
+                }
+            }
         }
         let wall_s = start.elapsed().as_secs_f64();
         bar.finish();
@@ -352,6 +487,7 @@ impl<C: Communicator> Simulation<C> {
             ranks: self.hydro.domain().comm().size(),
             domain: totals.domain(),
             energies: energies.checks(self.scene.energies.unwrap_or(&[]), end.t),
+            io: files.any().then_some(files.summary),
         };
 
         // Rank 0's files; an error is returned after the collectives below,
@@ -399,6 +535,81 @@ impl<C: Communicator> Simulation<C> {
             )?;
         }
         Ok(())
+    }
+
+    /// The snapshot and checkpoint due after the step just taken (before
+    /// anything else touches the particles). Collective. Returns whether a
+    /// checkpoint was written.
+    fn write_files(&mut self, files: &mut FileOutputs) -> Result<bool, AppError> {
+        let state = self.hydro.run_state();
+        let (step, t) = (state.step, state.t);
+        let owned = self.hydro.owned();
+        let p = &self.scene.particles;
+        let comm = self.hydro.domain().comm();
+        let mut attrs = self.outputs.attrs.clone();
+        attrs.push(("case".into(), Attr::Str(self.scene.case.into())));
+        let snapshot_due = files
+            .snapshots
+            .as_mut()
+            .is_some_and(|(_, s)| s.due(step, t));
+        if snapshot_due {
+            let fields = &files.snapshots.as_ref().expect("snapshots on").0;
+            let mut snap =
+                Snapshot::new(step, t, state.dt_prev, snapfile::box_spec(&self.scene.bbox));
+            for (name, value) in &attrs {
+                snap.set_attr(name, value.clone());
+            }
+            snap.set_attr("sphexa_kind", Attr::Str("snapshot".into()));
+            for name in fields {
+                let data = snapfile::field(p, owned.clone(), name).expect("checked by set_outputs");
+                snap.set_field(name, data);
+            }
+            let path = snapfile::numbered(&files.snapshot_dir, "snapshot", step);
+            let seconds = snapfile::write(comm, &path, &snap)?;
+            let io = &mut files.summary;
+            io.snapshot_seconds_mean = (io.snapshot_seconds_mean * io.snapshots as f64 + seconds)
+                / (io.snapshots + 1) as f64;
+            io.snapshots += 1;
+        }
+        let checkpoint_due = match files.checkpoint_every {
+            None => false,
+            Some(CheckpointEvery::Steps(_) | CheckpointEvery::Time(_)) => {
+                files.checkpoint_schedule.due(step, t)
+            }
+            Some(CheckpointEvery::Wall(interval)) => {
+                let late = files.last_checkpoint.elapsed().as_secs_f64() >= interval;
+                comm.all_reduce_scalar(u64::from(late), ReduceOp::Max) > 0
+            }
+            Some(CheckpointEvery::Auto { mtbf_s }) => {
+                let late = match files.checkpoint_cost {
+                    None => true,
+                    Some(c) => {
+                        let interval = (2.0 * c * mtbf_s).sqrt();
+                        files.summary.checkpoint_interval_s = Some(interval);
+                        files.last_checkpoint.elapsed().as_secs_f64() >= interval
+                    }
+                };
+                comm.all_reduce_scalar(u64::from(late), ReduceOp::Max) > 0
+            }
+        };
+        if checkpoint_due {
+            let snap = checkpoint::snapshot(p, owned, state, &self.scene.bbox, &attrs);
+            let path = snapfile::numbered(&files.checkpoint_dir, "checkpoint", step);
+            let seconds = snapfile::write(comm, &path, &snap)?;
+            files.checkpoint_cost = Some(seconds);
+            files.last_checkpoint = Instant::now();
+            let io = &mut files.summary;
+            io.checkpoint_seconds_mean = (io.checkpoint_seconds_mean * io.checkpoints as f64
+                + seconds)
+                / (io.checkpoints + 1) as f64;
+            io.checkpoints += 1;
+            files.written.push(path);
+            if files.keep > 0 && files.written.len() > files.keep && comm.rank() == 0 {
+                let old = files.written.remove(0);
+                std::fs::remove_file(&old).map_err(|e| AppError::io(&old, e))?;
+            }
+        }
+        Ok(checkpoint_due)
     }
 
     /// Recomputes density and pressure at the final positions, then every
@@ -487,6 +698,56 @@ impl<C: Communicator> Simulation<C> {
             buffer_bytes,
             bins,
         })
+    }
+}
+
+/// The file outputs of a run in progress: schedules, folders, what was
+/// written.
+#[derive(Debug)]
+struct FileOutputs {
+    snapshots: Option<(Vec<String>, Schedule)>,
+    snapshot_dir: std::path::PathBuf,
+    checkpoint_every: Option<CheckpointEvery>,
+    checkpoint_schedule: Schedule,
+    checkpoint_dir: std::path::PathBuf,
+    keep: usize,
+    written: Vec<std::path::PathBuf>,
+    checkpoint_cost: Option<f64>,
+    last_checkpoint: Instant,
+    summary: IoSummary,
+}
+
+impl FileOutputs {
+    fn new(o: &Outputs, out: &Path, t0: f64) -> Self {
+        let (every, keep) = match o.checkpoints {
+            Some((e, k)) => (Some(e), k),
+            None => (None, 0),
+        };
+        let checkpoint_schedule = match every {
+            Some(CheckpointEvery::Steps(n)) => Schedule::new(Some(n), None, Vec::new(), t0),
+            Some(CheckpointEvery::Time(dt)) => Schedule::new(None, Some(dt), Vec::new(), t0),
+            _ => Schedule::default(),
+        };
+        let snapshots = o.snapshots.clone().map(|(f, s)| {
+            let s = Schedule::new(s.every_steps, s.every_time, s.at.clone(), t0);
+            (f, s)
+        });
+        FileOutputs {
+            snapshots,
+            snapshot_dir: out.join("snapshots"),
+            checkpoint_every: every,
+            checkpoint_schedule,
+            checkpoint_dir: out.join("checkpoints"),
+            keep,
+            written: Vec::new(),
+            checkpoint_cost: None,
+            last_checkpoint: Instant::now(),
+            summary: IoSummary::default(),
+        }
+    }
+
+    fn any(&self) -> bool {
+        self.snapshots.is_some() || self.checkpoint_every.is_some()
     }
 }
 
@@ -581,7 +842,7 @@ mod tests {
             };
             assert_eq!(figures(&a), figures(&b), "{case}: {a:?}\n{b:?}");
             assert!(a.peak_density.is_finite() && a.min_pair_distance > 0.0);
-            assert_eq!(a.shock_radius.is_some(), case == "sedov");
+            assert!(a.shock_radius.is_some(), "{case}: shock");
             assert_eq!(a.plateau_density.is_some(), case == "noh");
             for file in ["conserved.csv", "profile.csv", "particles.csv"] {
                 let read = |d: &Path| std::fs::read(d.join(file)).expect("output");

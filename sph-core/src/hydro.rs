@@ -284,6 +284,21 @@ pub struct DomainStepStats {
     pub sync_seconds_max: f64,
 }
 
+/// The state of a [`Hydro`] between two steps that is not in the
+/// particles: what a checkpoint keeps so that a restart continues to the bit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunState {
+    /// Steps done.
+    pub step: u64,
+    /// Current time.
+    pub t: f64,
+    /// The last step taken (the integrator's `dt_{n-1}`).
+    pub dt_prev: f64,
+    /// Largest smoothing length after the last step's update, which the
+    /// next sync uses for its halos (none before the first step).
+    pub h_next_max: Option<f64>,
+}
+
 /// What one step did.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StepReport {
@@ -423,6 +438,29 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
     /// Steps done.
     pub fn steps(&self) -> u64 {
         self.step
+    }
+
+    /// The integrator's run state besides the particles (for checkpoints):
+    /// see [`RunState`].
+    pub fn run_state(&self) -> RunState {
+        RunState {
+            step: self.step,
+            t: self.t,
+            dt_prev: self.dt_prev,
+            h_next_max: self.next_h_max,
+        }
+    }
+
+    /// Continues from a checkpoint's [`RunState`] (steps done, time,
+    /// previous step, the next sync's largest h). The particles must be
+    /// the checkpoint's, with their integrator history (`dx`, `du_prev`,
+    /// `alpha`): do not [`prepare`](Self::prepare) them.
+    pub fn restore_run_state(&mut self, s: RunState) {
+        self.step = s.step;
+        self.t = s.t;
+        self.dt_prev = s.dt_prev;
+        self.next_h_max = s.h_next_max;
+        self.dt_cap = f64::INFINITY;
     }
 
     /// Caps the next step (to land exactly on an output or end time).

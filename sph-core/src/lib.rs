@@ -71,7 +71,7 @@ pub use av_switch::AvSwitchParams;
 pub use conserved::Conserved;
 pub use eos::Eos;
 pub use error::CoreError;
-pub use hydro::{DomainStepStats, Hydro, HydroConfig, StageTimes, StepReport, STAGES};
+pub use hydro::{DomainStepStats, Hydro, HydroConfig, RunState, StageTimes, StepReport, STAGES};
 pub use integrate::HUpdate;
 pub use neighbors::NeighborParams;
 pub use pair_loop::Gradients;

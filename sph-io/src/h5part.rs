@@ -65,7 +65,7 @@ const A_FIELDS: &str = "sph_io_fields";
 const A_TYPES: &str = "sph_io_types";
 const A_ATTRS: &str = "sph_io_attrs";
 const A_META: &str = "sph_io_meta_crc32";
-const A_CRC: &str = "crc32";
+pub(crate) const A_CRC: &str = "crc32";
 /// Rows per raw read of a field (512 KiB of 8-byte values).
 const ROWS_PER_READ: u64 = 1 << 16;
 
@@ -162,8 +162,29 @@ struct StepPlan<'a> {
 fn plan_step<'a>(snap: &'a Snapshot, select: &Selection) -> Result<StepPlan<'a>, IoError> {
     snap.validate()?;
     let fields = selected_fields(snap, select)?;
+    let table: Vec<(&str, FieldType)> = fields
+        .iter()
+        .map(|f| (f.name.as_str(), f.data.field_type()))
+        .collect();
+    let attrs = step_attrs(snap, &table, snap.len() as u64)?;
+    let fields = fields.into_iter().map(|f| (f, f.data.crc32())).collect();
+    Ok(StepPlan { attrs, fields })
+}
+
+/// The attributes of a step group: `snap`'s metadata and user attributes
+/// (its fields are not looked at) for a field table `table` of `n` values
+/// each, with the metadata checksum.
+pub(crate) fn step_attrs(
+    snap: &Snapshot,
+    table: &[(&str, FieldType)],
+    n: u64,
+) -> Result<Vec<(String, AttrValue)>, IoError> {
     let mut attrs = Vec::with_capacity(snap.attrs.len() + 10);
-    for (name, value) in &snap.attrs {
+    for (i, (name, value)) in snap.attrs.iter().enumerate() {
+        crate::snapshot::check_name(name)?;
+        if snap.attrs[..i].iter().any(|(m, _)| m == name) {
+            return Err(IoError::DuplicateName { name: name.clone() });
+        }
         if RESERVED_ATTRS.contains(&name.as_str()) {
             return Err(IoError::ReservedName { name: name.clone() });
         }
@@ -179,20 +200,15 @@ fn plan_step<'a>(snap: &'a Snapshot, select: &Selection) -> Result<StepPlan<'a>,
         A_PERIODIC,
         AttrValue::U8Array(b.periodic.map(u8::from).to_vec()),
     );
-    set(A_N, AttrValue::U64(snap.len() as u64));
-    if !fields.is_empty() {
+    set(A_N, AttrValue::U64(n));
+    if !table.is_empty() {
         set(
             A_FIELDS,
-            AttrValue::StringArray(fields.iter().map(|f| f.name.clone()).collect()),
+            AttrValue::StringArray(table.iter().map(|(n, _)| (*n).to_owned()).collect()),
         );
         set(
             A_TYPES,
-            AttrValue::StringArray(
-                fields
-                    .iter()
-                    .map(|f| f.data.field_type().to_string())
-                    .collect(),
-            ),
+            AttrValue::StringArray(table.iter().map(|(_, t)| t.to_string()).collect()),
         );
     }
     if !snap.attrs.is_empty() {
@@ -201,22 +217,9 @@ fn plan_step<'a>(snap: &'a Snapshot, select: &Selection) -> Result<StepPlan<'a>,
             AttrValue::StringArray(snap.attrs.iter().map(|(n, _)| n.clone()).collect()),
         );
     }
-    let table: Vec<(&str, FieldType)> = fields
-        .iter()
-        .map(|f| (f.name.as_str(), f.data.field_type()))
-        .collect();
-    let meta = meta_crc(
-        snap.step,
-        snap.time,
-        snap.dt,
-        b,
-        snap.len() as u64,
-        &table,
-        &snap.attrs,
-    );
+    let meta = meta_crc(snap.step, snap.time, snap.dt, b, n, table, &snap.attrs);
     set(A_META, AttrValue::U32(meta));
-    let fields = fields.into_iter().map(|f| (f, f.data.crc32())).collect();
-    Ok(StepPlan { attrs, fields })
+    Ok(attrs)
 }
 
 fn fill_dataset(b: &mut hdf5_pure::DatasetBuilder, f: &Field, crc: u32) {
@@ -409,7 +412,7 @@ pub(crate) fn tmp_path(path: &Path) -> PathBuf {
 
 /// Opens `path` for reading: metadata and field values are read on demand,
 /// straight into their destination (no whole-file buffer).
-fn open(path: &Path) -> Result<File, IoError> {
+pub(crate) fn open(path: &Path) -> Result<File, IoError> {
     let is_hdf5 = hdf5_pure::is_hdf5(path).map_err(|source| IoError::Io {
         path: path.to_owned(),
         source,
@@ -424,7 +427,7 @@ fn open(path: &Path) -> Result<File, IoError> {
 
 /// Runs a decoder call, turning its error, or a panic inside it (corrupt
 /// input the decoder does not anticipate), into [`IoError::Format`].
-fn guard<T>(
+pub(crate) fn guard<T>(
     path: &Path,
     step: Option<&str>,
     field: Option<&str>,
@@ -443,7 +446,7 @@ fn guard<T>(
     })
 }
 
-fn count_steps(path: &Path, file: &File) -> Result<usize, IoError> {
+pub(crate) fn count_steps(path: &Path, file: &File) -> Result<usize, IoError> {
     let groups = guard(path, None, None, || file.root().groups())?;
     let mut count = 0;
     while groups.iter().any(|g| *g == step_group(count)) {
@@ -452,7 +455,60 @@ fn count_steps(path: &Path, file: &File) -> Result<usize, IoError> {
     Ok(count)
 }
 
-fn read_group(path: &Path, file: &File, k: usize, select: &Selection) -> Result<Snapshot, IoError> {
+/// A step group's metadata, checked against its checksum.
+pub(crate) struct StepMeta {
+    pub(crate) gname: String,
+    pub(crate) group: hdf5_pure::Group,
+    pub(crate) step: u64,
+    pub(crate) time: f64,
+    pub(crate) dt: f64,
+    pub(crate) bbox: BoxSpec,
+    pub(crate) n: u64,
+    pub(crate) table: Vec<(String, FieldType)>,
+    pub(crate) attrs: Vec<(String, Attr)>,
+}
+
+impl StepMeta {
+    /// The fields `select` names with their types (all for
+    /// [`Selection::All`]); a name the step lacks is an error.
+    pub(crate) fn wanted(
+        &self,
+        path: &Path,
+        select: &Selection,
+    ) -> Result<Vec<(String, FieldType)>, IoError> {
+        match select {
+            Selection::All => Ok(self.table.clone()),
+            Selection::Names(want) => want
+                .iter()
+                .map(|w| {
+                    self.table
+                        .iter()
+                        .find(|(name, _)| name == w)
+                        .cloned()
+                        .ok_or_else(|| IoError::MissingField {
+                            path: path.to_owned(),
+                            step: self.gname.clone(),
+                            field: w.clone(),
+                        })
+                })
+                .collect(),
+        }
+    }
+
+    /// An empty snapshot with this metadata.
+    pub(crate) fn snapshot(&self) -> Snapshot {
+        Snapshot {
+            step: self.step,
+            time: self.time,
+            dt: self.dt,
+            bbox: self.bbox,
+            attrs: self.attrs.clone(),
+            fields: Vec::new(),
+        }
+    }
+}
+
+pub(crate) fn read_meta(path: &Path, file: &File, k: usize) -> Result<StepMeta, IoError> {
     let gname = step_group(k);
     let count = count_steps(path, file)?;
     if k >= count {
@@ -548,50 +604,53 @@ fn read_group(path: &Path, file: &File, k: usize, select: &Selection) -> Result<
             computed: meta,
         });
     }
-
-    let wanted: Vec<(&str, FieldType)> = match select {
-        Selection::All => table.clone(),
-        Selection::Names(want) => want
-            .iter()
-            .map(|w| {
-                table
-                    .iter()
-                    .find(|(name, _)| name == w)
-                    .copied()
-                    .ok_or_else(|| IoError::MissingField {
-                        path: path.to_owned(),
-                        step: gname.clone(),
-                        field: w.clone(),
-                    })
-            })
-            .collect::<Result<_, _>>()?,
-    };
-    let mut snap = Snapshot {
+    let table = table.into_iter().map(|(n, t)| (n.to_owned(), t)).collect();
+    Ok(StepMeta {
+        gname,
+        group: g,
         step,
         time,
         dt,
         bbox,
+        n,
+        table,
         attrs: user,
-        fields: Vec::with_capacity(wanted.len()),
-    };
+    })
+}
+
+fn read_group(path: &Path, file: &File, k: usize, select: &Selection) -> Result<Snapshot, IoError> {
+    let meta = read_meta(path, file, k)?;
+    let wanted = meta.wanted(path, select)?;
+    let mut snap = meta.snapshot();
+    snap.fields.reserve(wanted.len());
     for (name, t) in wanted {
-        let data = read_field(path, &gname, &g, name, t, n)?;
-        snap.fields.push(Field {
-            name: name.to_owned(),
-            data,
-        });
+        let (data, computed, stored) =
+            read_field(path, &meta.gname, &meta.group, &name, t, meta.n, 0..meta.n)?;
+        if computed != stored {
+            return Err(IoError::Checksum {
+                path: path.to_owned(),
+                step: meta.gname.clone(),
+                field: name,
+                stored,
+                computed,
+            });
+        }
+        snap.fields.push(Field { name, data });
     }
     Ok(snap)
 }
-
-fn read_field(
+/// Reads `rows` of field `name` (of type `t`, `n` values) of step group
+/// `g`: the values, the CRC32 of the rows read, and the field's stored CRC32
+/// (of all `n` values). The caller compares the checksums.
+pub(crate) fn read_field(
     path: &Path,
     gname: &str,
     g: &hdf5_pure::Group,
     name: &str,
     t: FieldType,
     n: u64,
-) -> Result<FieldData, IoError> {
+    rows: std::ops::Range<u64>,
+) -> Result<(FieldData, u32, u32), IoError> {
     let missing = || IoError::MissingField {
         path: path.to_owned(),
         step: gname.to_owned(),
@@ -662,14 +721,15 @@ fn read_field(
         expected: n,
         found,
     };
+    let rows = rows.start.min(n)..rows.end.min(n);
     let (data, computed) = if little_endian {
-        let len = usize::try_from(n).map_err(|_| short(n))?;
-        let mut words: Vec<u64> = Vec::with_capacity(len);
+        let len = usize::try_from(rows.end - rows.start).map_err(|_| short(n))?;
+        let mut words: Vec<u64> = Vec::with_capacity(if t == FieldType::U64 { len } else { 0 });
         let mut floats: Vec<f64> = Vec::with_capacity(if t == FieldType::F64 { len } else { 0 });
         let mut crc = crc32fast::Hasher::new();
-        let mut start = 0u64;
-        while start < n {
-            let count = (n - start).min(ROWS_PER_READ);
+        let mut start = rows.start;
+        while start < rows.end {
+            let count = (rows.end - start).min(ROWS_PER_READ);
             let raw = guard(path, at.0, at.1, || ds.read_raw_rows(start, count))?;
             if raw.len() as u64 != 8 * count {
                 return Err(short(start + raw.len() as u64 / 8));
@@ -697,17 +757,13 @@ fn read_field(
         if data.len() as u64 != n {
             return Err(short(data.len() as u64));
         }
+        let (a, b) = (rows.start as usize, rows.end as usize);
+        let data = match data {
+            FieldData::F64(v) => FieldData::F64(v[a..b].to_vec()),
+            FieldData::U64(v) => FieldData::U64(v[a..b].to_vec()),
+        };
         let crc = data.crc32();
         (data, crc)
     };
-    if computed != stored {
-        return Err(IoError::Checksum {
-            path: path.to_owned(),
-            step: gname.to_owned(),
-            field: name.to_owned(),
-            stored,
-            computed,
-        });
-    }
-    Ok(data)
+    Ok((data, computed, stored))
 }

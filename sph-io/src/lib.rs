@@ -7,6 +7,14 @@
 //! and ParaView read (one group `Step#k` per snapshot, one dataset per
 //! field), written in pure Rust so the default build needs no libhdf5.
 //!
+//! Distributed runs write one file from many processes with [`slab`]:
+//! rank 0 lays the file out (metadata, checksums combined from every rank's
+//! partial CRC32s, datasets sized for all rows), every rank writes its own
+//! rows in place, and the file is renamed when all are done; any number of
+//! processes reads it back, each its share of rows. [`foreign`] reads the
+//! H5Part files of other codes (SPH-EXA's layout: no checksums, `f32` or
+//! integer fields).
+//!
 //! Integrity: a file is written to `NAME.tmp` and renamed when complete;
 //! every field carries a CRC32 and every step a CRC32 of its metadata, both
 //! checked on read. A torn, truncated or corrupted file, a missing field, a
@@ -41,7 +49,9 @@
 //! ```
 
 mod error;
+pub mod foreign;
 pub mod h5part;
+pub mod slab;
 mod snapshot;
 
 use std::path::Path;

@@ -290,7 +290,7 @@ impl Snapshot {
     }
 }
 
-fn check_name(name: &str) -> Result<(), IoError> {
+pub(crate) fn check_name(name: &str) -> Result<(), IoError> {
     if name.is_empty() || name.contains('/') || name.contains('\0') || name == "." {
         return Err(IoError::BadName {
             name: name.to_owned(),

@@ -1,16 +1,22 @@
 //! `sphexa`: run the SPH-EXA test cases from the command line.
 
 use clap::builder::{PossibleValue, PossibleValuesParser};
-use clap::{Args, Parser, Subcommand, ValueEnum};
+use clap::parser::ValueSource;
+use clap::{
+    ArgAction, ArgMatches, Args, CommandFactory, FromArgMatches, Parser, Subcommand, ValueEnum,
+};
 use sph_apps::cases::{self, Scheme, SchemeOverrides};
-use sph_apps::simulation::{Progress, Stop};
+use sph_apps::checkpoint;
+use sph_apps::output::snapshot::{self as snapfile, Schedule};
+use sph_apps::simulation::{CheckpointEvery, Outputs, Progress, Stop};
 use sph_apps::{AppError, Simulation};
 use sph_comm::Communicator;
 use sph_core::PRESETS;
 use sph_core::{Gradients, HydroConfig};
 use sph_kernels::{KernelChoice, Tabulated};
 use sph_tree::Curve;
-use std::path::PathBuf;
+use std::ffi::OsString;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 /// Smoothed Particle Hydrodynamics (the SPH-EXA scheme), multi-threaded, and
@@ -25,7 +31,8 @@ struct Cli {
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Run a test case and write its outputs (conserved.csv, timings.csv,
-    /// profile.csv, summary.json) into --out.
+    /// profile.csv, summary.json, config.toml; snapshots/ and checkpoints/
+    /// when asked for) into --out.
     Run(Box<RunArgs>),
     /// List the test cases with their default size, end time and scheme.
     Cases,
@@ -63,9 +70,10 @@ const SIDE_RANGE: (usize, usize) = (4, 1000);
 
 #[derive(Args, Debug)]
 struct RunArgs {
-    /// Test case (`sphexa cases` lists each with its defaults).
+    /// Test case (`sphexa cases` lists each with its defaults). Required
+    /// unless --config or --restart names it.
     #[arg(value_parser = case_names())]
-    case: String,
+    case: Option<String>,
     /// Particles per side of the initial lattice, 4 to 1000 (default: the
     /// case's, see `sphexa cases`).
     #[arg(short = 'n', long = "side", value_name = "N", allow_negative_numbers = true,
@@ -152,6 +160,158 @@ struct RunArgs {
     /// No progress output.
     #[arg(short, long)]
     quiet: bool,
+    /// Fields of the snapshots, comma-separated (default:
+    /// x,y,z,vx,vy,vz,h,m,u,rho,p,id). Snapshots are written when a
+    /// --snapshot-every-steps, --snapshot-every-time or --snapshot-at
+    /// schedule is given, as OUT/snapshots/snapshot_SSSSSSSS.h5 (HDF5,
+    /// H5Part layout: h5py, ParaView and SPH-EXA's scripts read them).
+    /// Fields: id,x,y,z,vx,vy,vz,h,m,u,rho,p,c,ax,ay,az,du,du_prev,dx,dy,dz,nc
+    /// and, where the scheme has them, omega, alpha, phi, c11..c33, rho0, p0.
+    #[arg(long, value_name = "LIST", value_parser = parse_field_list)]
+    snapshot_fields: Option<FieldList>,
+    /// Write a snapshot after every N-th step (N >= 1).
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = parse_steps)]
+    snapshot_every_steps: Option<u64>,
+    /// Write a snapshot after the first step reaching each multiple of T
+    /// (simulated time, positive). Steps are never shortened for outputs.
+    #[arg(long, value_name = "T", allow_negative_numbers = true, value_parser = parse_positive)]
+    snapshot_every_time: Option<f64>,
+    /// Write a snapshot after the first step reaching each of these times
+    /// (comma-separated, each >= 0).
+    #[arg(long, value_name = "T1,T2,...", allow_negative_numbers = true, value_parser = parse_times)]
+    snapshot_at: Option<Times>,
+    /// Write checkpoints (every field a restart needs, full precision) as
+    /// OUT/checkpoints/checkpoint_SSSSSSSS.h5: `N` after every N-th step;
+    /// `time:T` after the first step reaching each multiple of simulated
+    /// time T; `wall:DURATION` every DURATION of wall-clock time (`90s`,
+    /// `10m`, `2h`, `1d`; a plain number is seconds); `auto` every
+    /// sqrt(2 C M) of wall-clock time (Young/Daly), with C the measured time
+    /// of the last checkpoint (the first is written after step 1) and M
+    /// from --mtbf.
+    #[arg(long, value_name = "SPEC", value_parser = parse_checkpoint_every)]
+    checkpoint_every: Option<CheckpointSpec>,
+    /// Mean time between failures of the machine, for `--checkpoint-every
+    /// auto`: a DURATION (`6h`, `30m`, `2d`, or seconds).
+    #[arg(long, value_name = "DURATION", value_parser = parse_duration)]
+    mtbf: Option<f64>,
+    /// Checkpoints of this run to keep: older ones are deleted once a newer
+    /// one is complete (0 keeps all).
+    #[arg(long, value_name = "K", default_value_t = 2, allow_negative_numbers = true,
+          value_parser = parse_keep)]
+    checkpoint_keep: usize,
+    /// Continue the run of checkpoint FILE (its step STEP, default the
+    /// last step group): the checkpoint's configuration applies, options
+    /// given here override it (a changed physics option makes the
+    /// continuation differ from the run that wrote it). --steps and
+    /// --end-time count from the run's start, not from the checkpoint.
+    /// conserved.csv in --out keeps its lines up to the checkpoint;
+    /// timings.csv and summary.json cover the continued part.
+    #[arg(long, value_name = "FILE[:STEP]", conflicts_with = "init")]
+    restart: Option<String>,
+    /// Start the case from the particles of snapshot FILE (Step#K, default
+    /// the last): ours, or an H5Part file of SPH-EXA (group Step#K with 1-D
+    /// datasets x, y, z, h, m, u and optionally vx, vy, vz, id, any float
+    /// or integer type; the box from attribute `box` if present). Time
+    /// starts at 0; the case supplies the scheme and the reference.
+    #[arg(long, value_name = "FILE[:K]")]
+    init: Option<String>,
+    /// Read options from a TOML file: one key per option, named as the
+    /// option without its dashes (`side = 20`, `end-time = 0.05`,
+    /// `av-switches = "on"`, `snapshot-at = [0.01, 0.02]`, `case =
+    /// "sedov"`); options on the command line override it. Every run writes
+    /// its resolved configuration as OUT/config.toml, which repeats it.
+    #[arg(long, value_name = "FILE")]
+    config: Option<PathBuf>,
+}
+
+/// A `--checkpoint-every` value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum CheckpointSpec {
+    Steps(u64),
+    Time(f64),
+    Wall(f64),
+    Auto,
+}
+
+impl std::fmt::Display for CheckpointSpec {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CheckpointSpec::Steps(n) => write!(f, "{n}"),
+            CheckpointSpec::Time(t) => write!(f, "time:{t}"),
+            CheckpointSpec::Wall(s) => write!(f, "wall:{s}s"),
+            CheckpointSpec::Auto => f.write_str("auto"),
+        }
+    }
+}
+
+fn parse_checkpoint_every(s: &str) -> Result<CheckpointSpec, String> {
+    let s = s.trim();
+    let allowed = "allowed: N (steps, at least 1), time:T (positive simulated time), wall:DURATION (e.g. 90s, 10m, 2h), auto (with --mtbf)";
+    if s == "auto" {
+        return Ok(CheckpointSpec::Auto);
+    }
+    if let Some(t) = s.strip_prefix("time:") {
+        return parse_positive(t)
+            .map(CheckpointSpec::Time)
+            .map_err(|_| format!("'{t}' is not a positive time; {allowed}"));
+    }
+    if let Some(d) = s.strip_prefix("wall:") {
+        return parse_duration(d).map(CheckpointSpec::Wall);
+    }
+    parse_steps(s)
+        .map(CheckpointSpec::Steps)
+        .map_err(|_| allowed.to_owned())
+}
+
+/// A duration: a positive number with an optional unit s, m, h or d.
+fn parse_duration(s: &str) -> Result<f64, String> {
+    let s = s.trim();
+    let (num, scale) = match s.char_indices().last() {
+        Some((i, 's')) => (&s[..i], 1.0),
+        Some((i, 'm')) => (&s[..i], 60.0),
+        Some((i, 'h')) => (&s[..i], 3600.0),
+        Some((i, 'd')) => (&s[..i], 86400.0),
+        _ => (s, 1.0),
+    };
+    match num.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(x * scale),
+        _ => Err("a duration is a positive number with an optional unit s, m, h or d (e.g. 90s, 10m, 6h, 2d)".into()),
+    }
+}
+
+/// A `--snapshot-fields` list.
+#[derive(Debug, Clone, PartialEq)]
+struct FieldList(Vec<String>);
+
+fn parse_field_list(s: &str) -> Result<FieldList, String> {
+    snapfile::parse_fields(s).map(FieldList)
+}
+
+/// A `--snapshot-at` list.
+#[derive(Debug, Clone, PartialEq)]
+struct Times(Vec<f64>);
+
+fn parse_times(s: &str) -> Result<Times, String> {
+    s.split(',')
+        .map(|t| {
+            parse_number(t, |x| x >= 0.0, "").map_err(|_| {
+                format!(
+                    "'{}' is not a time >= 0; give times separated by commas",
+                    t.trim()
+                )
+            })
+        })
+        .collect::<Result<Vec<f64>, String>>()
+        .map(Times)
+}
+
+fn parse_keep(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<i64>() {
+        Ok(n) if n >= 0 => Ok(n as usize),
+        _ => Err(
+            "the number of checkpoints to keep must be a whole number >= 0 (0 keeps all)".into(),
+        ),
+    }
 }
 
 /// The registered cases as the allowed values of the case argument (with
@@ -228,13 +388,22 @@ fn parse_kernel(s: &str) -> Result<KernelChoice, String> {
 
 fn main() -> ExitCode {
     sph_apps::memory::return_large_buffers_to_os();
-    let cli = Cli::parse();
+    let matches = Cli::command().get_matches();
+    let cli = match Cli::from_arg_matches(&matches) {
+        Ok(cli) => cli,
+        Err(e) => e.exit(),
+    };
     match cli.command {
         Command::Cases => {
             list_cases();
             ExitCode::SUCCESS
         }
-        Command::Run(args) => match run(*args) {
+        Command::Run(args) => match layered(
+            *args,
+            matches.subcommand_matches("run").expect("run was parsed"),
+        )
+        .and_then(run)
+        {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
                 eprintln!("error: {e}");
@@ -328,8 +497,462 @@ fn scheme_overrides(a: &RunArgs) -> Result<SchemeOverrides, AppError> {
     })
 }
 
+/// `sphexa run` options alone (to parse a configuration's options).
+#[derive(Parser, Debug)]
+#[command(name = "sphexa run", no_binary_name = true)]
+struct RunOnly {
+    #[command(flatten)]
+    args: RunArgs,
+}
+
+/// One option of `sphexa run`: its configuration key (the long option
+/// without dashes; `case` for the case), clap id, and kind.
+#[derive(Debug, Clone)]
+struct OptionKey {
+    key: String,
+    id: String,
+    flag: bool,
+    positional: bool,
+}
+
+/// Every option of `sphexa run`, with its configuration key.
+fn option_keys() -> Vec<OptionKey> {
+    RunOnly::command()
+        .get_arguments()
+        .filter(|a| !matches!(a.get_id().as_str(), "help" | "version"))
+        .map(|a| OptionKey {
+            key: a
+                .get_long()
+                .map(str::to_owned)
+                .unwrap_or_else(|| a.get_id().to_string()),
+            id: a.get_id().to_string(),
+            flag: matches!(a.get_action(), ArgAction::SetTrue),
+            positional: a.is_positional(),
+        })
+        .collect()
+}
+
+/// Options that exclude each other: a layer's key is dropped when a
+/// higher layer sets its partner.
+const EXCLUSIVE: &[[&str; 2]] = &[
+    ["steps", "end-time"],
+    ["grad-h", "no-grad-h"],
+    ["restart", "init"],
+];
+
+/// The command-line tokens of `key = value` from `source`.
+fn key_tokens(k: &OptionKey, value: &toml::Value, source: &str) -> Result<Vec<String>, AppError> {
+    let bad = |what: &str| AppError::Usage(format!("{source}: key '{}' = {value}: {what}", k.key));
+    if k.flag {
+        return match value {
+            toml::Value::Boolean(true) => Ok(vec![format!("--{}", k.key)]),
+            toml::Value::Boolean(false) => Ok(Vec::new()),
+            _ => Err(bad("must be true or false")),
+        };
+    }
+    let scalar = |v: &toml::Value| match v {
+        toml::Value::String(s) => Ok(s.clone()),
+        toml::Value::Integer(i) => Ok(i.to_string()),
+        // Display of f64 is the shortest text that parses back exactly.
+        toml::Value::Float(f) => Ok(f.to_string()),
+        toml::Value::Boolean(b) => Ok(if *b { "on" } else { "off" }.to_owned()),
+        _ => Err(bad(
+            "must be a string, a number, a boolean or a list of these",
+        )),
+    };
+    let text = match value {
+        toml::Value::Array(items) => items
+            .iter()
+            .map(scalar)
+            .collect::<Result<Vec<_>, _>>()?
+            .join(","),
+        v => scalar(v)?,
+    };
+    Ok(if k.positional {
+        vec![text]
+    } else {
+        vec![format!("--{}={text}", k.key)]
+    })
+}
+
+/// Reads a configuration table from TOML `text` of `source`, refusing
+/// unknown keys (named, with the allowed keys) and values the option's own
+/// parser refuses.
+fn config_table(text: &str, source: &str, keys: &[OptionKey]) -> Result<toml::Table, AppError> {
+    let table: toml::Table = text
+        .parse()
+        .map_err(|e: toml::de::Error| AppError::Usage(format!("{source}: not valid TOML: {e}")))?;
+    for (name, value) in &table {
+        let Some(k) = keys.iter().find(|k| &k.key == name && k.key != "config") else {
+            let allowed: Vec<&str> = keys
+                .iter()
+                .map(|k| k.key.as_str())
+                .filter(|k| *k != "config")
+                .collect();
+            return Err(AppError::Usage(format!(
+                "{source}: unknown key '{name}'; allowed keys: {}",
+                allowed.join(", ")
+            )));
+        };
+        let tokens = key_tokens(k, value, source)?;
+        if let Err(e) = RunOnly::try_parse_from(&tokens) {
+            let msg = e.render().to_string();
+            let first = msg
+                .lines()
+                .next()
+                .unwrap_or("")
+                .trim_start_matches("error: ");
+            return Err(AppError::Usage(format!(
+                "{source}: key '{name}' = {value}: {first}"
+            )));
+        }
+    }
+    Ok(table)
+}
+
+/// The run's options: the command line over the configuration file
+/// (`--config`) over the checkpoint's configuration (`--restart`).
+fn layered(cli: RunArgs, m: &ArgMatches) -> Result<RunArgs, AppError> {
+    if cli.config.is_none() && cli.restart.is_none() {
+        return Ok(cli);
+    }
+    let keys = option_keys();
+    let mut taken: Vec<String> = keys
+        .iter()
+        .filter(|k| m.value_source(&k.id) == Some(ValueSource::CommandLine))
+        .map(|k| k.key.clone())
+        .collect();
+    let mut layers: Vec<(String, toml::Table)> = Vec::new();
+    if let Some(path) = &cli.config {
+        let source = path.display().to_string();
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| AppError::Usage(format!("--config {source}: cannot read it ({e})")))?;
+        layers.push((source.clone(), config_table(&text, &source, &keys)?));
+    }
+    let restart = cli.restart.clone().or_else(|| {
+        layers
+            .first()
+            .and_then(|(_, t)| t.get("restart"))
+            .and_then(|v| v.as_str().map(str::to_owned))
+    });
+    if let Some(spec) = restart {
+        let (path, step) = checkpoint::split_spec(&spec)?;
+        let k = checkpoint::group_of_step(&path, step)?;
+        let meta = sph_io::SnapshotReader::read_step(
+            &sph_io::H5Part,
+            &path,
+            k,
+            &sph_io::Selection::Names(Vec::new()),
+        )?;
+        let source = format!("{} (the checkpoint's configuration)", path.display());
+        if let Some(sph_io::Attr::Str(text)) = meta.attr("config") {
+            let mut table = config_table(text, &source, &keys)?;
+            for key in ["restart", "init", "config"] {
+                table.remove(key);
+            }
+            layers.push((source, table));
+        }
+    }
+    let mut tokens: Vec<OsString> = Vec::new();
+    for (source, table) in &layers {
+        let mut mine = Vec::new();
+        for (name, value) in table {
+            let partner_taken = EXCLUSIVE.iter().any(|pair| {
+                pair.contains(&name.as_str()) && pair.iter().any(|p| taken.iter().any(|t| t == p))
+            });
+            if taken.contains(name) || partner_taken {
+                continue;
+            }
+            let k = keys.iter().find(|k| &k.key == name).expect("checked key");
+            tokens.extend(
+                key_tokens(k, value, source)?
+                    .into_iter()
+                    .map(OsString::from),
+            );
+            mine.push(name.clone());
+        }
+        taken.extend(mine);
+    }
+    // The command line's own tokens, after `run`.
+    let argv: Vec<OsString> = std::env::args_os().collect();
+    if let Some(at) = argv.iter().position(|a| a == "run") {
+        tokens.extend(argv[at + 1..].iter().cloned());
+    }
+    RunOnly::try_parse_from(&tokens)
+        .map(|r| r.args)
+        .map_err(|e| {
+            let msg = e.render().to_string();
+            AppError::Usage(
+                msg.lines()
+                    .next()
+                    .unwrap_or("")
+                    .trim_start_matches("error: ")
+                    .to_owned(),
+            )
+        })
+}
+
+/// The fully resolved configuration of a run: every option with the value
+/// it ran with (scheme options as the case and the overrides made them), so
+/// `sphexa run --config OUT/config.toml` repeats the run.
+fn resolved_config(
+    a: &RunArgs,
+    case: &str,
+    side: usize,
+    stop: Stop,
+    out: &Path,
+    config: &HydroConfig,
+) -> toml::Table {
+    use toml::Value;
+    let mut t = toml::Table::new();
+    let mut set = |k: &str, v: Value| {
+        t.insert(k.to_owned(), v);
+    };
+    let on = |b: bool| Value::String(if b { "on" } else { "off" }.into());
+    set("case", Value::String(case.into()));
+    set("side", Value::Integer(side as i64));
+    match stop {
+        Stop::Steps(n) => set("steps", Value::Integer(n as i64)),
+        Stop::Time(te) => set("end-time", Value::Float(te)),
+    }
+    set("out", Value::String(out.display().to_string()));
+    if let Some(n) = a.threads {
+        set("threads", Value::Integer(n as i64));
+    }
+    set("kernel", Value::String(a.kernel.to_string()));
+    set("ng0", Value::Integer(a.ng0 as i64));
+    set("ngmax", Value::Integer(a.ngmax as i64));
+    if let Some(s) = &a.scheme {
+        set("scheme", Value::String(s.clone()));
+    }
+    let s = &config.scheme;
+    set(
+        "gradients",
+        Value::String(match s.gradients {
+            Gradients::Iad => "iad".into(),
+            Gradients::Kernel => "kernel".into(),
+        }),
+    );
+    set(
+        "curve",
+        Value::String(match a.curve {
+            CurveArg::Hilbert => "hilbert".into(),
+            CurveArg::Morton => "morton".into(),
+        }),
+    );
+    set("alpha", Value::Float(s.alpha()));
+    set("courant", Value::Float(a.courant));
+    set("grad-h", on(s.grad_h));
+    set("av-switches", on(s.switches().is_some()));
+    set("conductivity", Value::Float(s.conductivity.unwrap_or(0.0)));
+    set("theta", Value::Float(a.theta));
+    if let Some(g) = config.gravity {
+        set("softening", Value::Float(g.softening));
+    }
+    set("write-particles", Value::Boolean(a.write_particles));
+    set("quiet", Value::Boolean(a.quiet));
+    if let Some(f) = &a.snapshot_fields {
+        set("snapshot-fields", Value::String(f.0.join(",")));
+    }
+    if let Some(n) = a.snapshot_every_steps {
+        set("snapshot-every-steps", Value::Integer(n as i64));
+    }
+    if let Some(x) = a.snapshot_every_time {
+        set("snapshot-every-time", Value::Float(x));
+    }
+    if let Some(at) = &a.snapshot_at {
+        set(
+            "snapshot-at",
+            Value::Array(at.0.iter().map(|&x| Value::Float(x)).collect()),
+        );
+    }
+    if let Some(c) = a.checkpoint_every {
+        set("checkpoint-every", Value::String(c.to_string()));
+    }
+    if let Some(m) = a.mtbf {
+        set("mtbf", Value::String(format!("{m}s")));
+    }
+    set("checkpoint-keep", Value::Integer(a.checkpoint_keep as i64));
+    if let Some(r) = &a.restart {
+        set("restart", Value::String(r.clone()));
+    }
+    if let Some(i) = &a.init {
+        set("init", Value::String(i.clone()));
+    }
+    t
+}
+
+/// The particles of snapshot `spec` (`FILE[:K]`, ours or SPH-EXA's) as
+/// this rank's share of the initial conditions of a run with `fields`;
+/// the total and, if the file has one, its box (with `boundary` kinds
+/// unless the file records them).
+fn init_particles<C: Communicator>(
+    comm: &C,
+    spec: &str,
+    fields: sph_core::FieldSet,
+    boundary: [sph_tree::Boundary; 3],
+) -> Result<(sph_core::Particles, usize, Option<sph_tree::BoundingBox>), AppError> {
+    use sph_io::foreign;
+    let (path, k) = checkpoint::split_spec(spec)?;
+    let count = foreign::step_count(&path)?;
+    let index = match k {
+        Some(k) => k as usize,
+        None => count.saturating_sub(1),
+    };
+    let required = ["x", "y", "z", "h", "m", "u"];
+    let optional = ["vx", "vy", "vz", "id"];
+    let head = foreign::read_foreign_rows(&path, index, &required, &[], 0..0)?;
+    let total = head.total;
+    let (r, size) = (comm.rank() as u64, comm.size() as u64);
+    let rows = total * r / size..total * (r + 1) / size;
+    // Our own files: read through the checksummed reader.
+    let ours = sph_io::SnapshotReader::read_step(
+        &sph_io::H5Part,
+        &path,
+        index,
+        &sph_io::Selection::Names(Vec::new()),
+    )
+    .is_ok();
+    let mut values: Vec<(String, Vec<f64>)> = Vec::new();
+    let mut ids: Option<Vec<u64>> = None;
+    let mut periodic = None;
+    if ours {
+        let present: Vec<&str> = required
+            .iter()
+            .chain(&optional)
+            .copied()
+            .filter(|n| head.datasets.iter().any(|d| d == n))
+            .collect();
+        let (snap, _) =
+            snapfile::read_share(comm, &path, index, &sph_io::Selection::names(&present))?;
+        periodic = Some(snap.bbox.periodic);
+        for f in snap.fields {
+            match f.data {
+                sph_io::FieldData::F64(v) => values.push((f.name, v)),
+                sph_io::FieldData::U64(v) if f.name == "id" => ids = Some(v),
+                sph_io::FieldData::U64(v) => {
+                    values.push((f.name, v.into_iter().map(|x| x as f64).collect()))
+                }
+            }
+        }
+        for n in required {
+            if !values.iter().any(|(m, _)| m == n) {
+                return Err(AppError::Usage(format!(
+                    "--init {}: Step#{index} has no field '{n}'; initial conditions need {}",
+                    path.display(),
+                    required.join(", ")
+                )));
+            }
+        }
+    } else {
+        let st = foreign::read_foreign_rows(&path, index, &required, &optional, rows.clone())?;
+        for (name, v) in st.fields {
+            if name == "id" {
+                ids = Some(v.iter().map(|&x| x as u64).collect());
+            } else {
+                values.push((name, v));
+            }
+        }
+    }
+    let n = (rows.end - rows.start) as usize;
+    let mut p = sph_core::Particles::new(n, fields);
+    p.id = ids.unwrap_or_else(|| rows.clone().collect());
+    for (name, v) in values {
+        let dst = match name.as_str() {
+            "x" => &mut p.x,
+            "y" => &mut p.y,
+            "z" => &mut p.z,
+            "vx" => &mut p.vx,
+            "vy" => &mut p.vy,
+            "vz" => &mut p.vz,
+            "h" => &mut p.h,
+            "m" => &mut p.m,
+            "u" => &mut p.u,
+            _ => continue,
+        };
+        dst.copy_from_slice(&v);
+    }
+    let bbox = match head.bbox {
+        Some(b) => {
+            let kinds = match periodic {
+                Some(per) => per.map(|q| {
+                    if q {
+                        sph_tree::Boundary::Periodic
+                    } else {
+                        sph_tree::Boundary::Open
+                    }
+                }),
+                None => boundary,
+            };
+            Some(sph_tree::BoundingBox::new(
+                [b[0], b[2], b[4]],
+                [b[1], b[3], b[5]],
+                kinds,
+            )?)
+        }
+        None => None,
+    };
+    let total = usize::try_from(total)
+        .map_err(|_| AppError::Usage(format!("--init {}: {total} particles", path.display())))?;
+    Ok((p, total, bbox))
+}
+
+/// The snapshot and checkpoint outputs the options ask for; `config` is
+/// the resolved configuration (stored in every file), `t0` the start time.
+fn outputs(a: &RunArgs, config: String, t0: f64) -> Result<Outputs, AppError> {
+    let schedule = Schedule::new(
+        a.snapshot_every_steps,
+        a.snapshot_every_time,
+        a.snapshot_at.clone().map(|t| t.0).unwrap_or_default(),
+        t0,
+    );
+    if a.snapshot_fields.is_some() && !schedule.is_active() {
+        return Err(AppError::Usage(
+            "--snapshot-fields needs a schedule: --snapshot-every-steps N, --snapshot-every-time T or --snapshot-at T1,T2,...".into(),
+        ));
+    }
+    let snapshots = schedule.is_active().then(|| {
+        let fields = a.snapshot_fields.clone().map(|f| f.0).unwrap_or_else(|| {
+            snapfile::DEFAULT_FIELDS
+                .iter()
+                .map(|s| (*s).to_owned())
+                .collect()
+        });
+        (fields, schedule)
+    });
+    let every = match (a.checkpoint_every, a.mtbf) {
+        (None, None) => None,
+        (None, Some(_)) => {
+            return Err(AppError::Usage("--mtbf is used by --checkpoint-every auto; give both".into()))
+        }
+        (Some(CheckpointSpec::Auto), None) => {
+            return Err(AppError::Usage(
+                "--checkpoint-every auto needs --mtbf DURATION (the machine's mean time between failures, e.g. 6h)".into(),
+            ))
+        }
+        (Some(CheckpointSpec::Auto), Some(m)) => Some(CheckpointEvery::Auto { mtbf_s: m }),
+        (Some(_), Some(_)) => {
+            return Err(AppError::Usage("--mtbf applies only to --checkpoint-every auto".into()))
+        }
+        (Some(CheckpointSpec::Steps(n)), None) => Some(CheckpointEvery::Steps(n)),
+        (Some(CheckpointSpec::Time(t)), None) => Some(CheckpointEvery::Time(t)),
+        (Some(CheckpointSpec::Wall(w)), None) => Some(CheckpointEvery::Wall(w)),
+    };
+    Ok(Outputs {
+        snapshots,
+        checkpoints: every.map(|e| (e, a.checkpoint_keep)),
+        attrs: vec![("config".into(), sph_io::Attr::Str(config))],
+    })
+}
+
 fn run(a: RunArgs) -> Result<(), AppError> {
-    let case = cases::lookup(&a.case)?;
+    let Some(case_name) = a.case.clone() else {
+        return Err(AppError::Usage(format!(
+            "no case given: name one ({}), or give --config FILE or --restart FILE",
+            cases::names().join(", ")
+        )));
+    };
+    let case = cases::lookup(&case_name)?;
     let side = a.side.unwrap_or(case.default_side());
     if a.ng0 < 8 || a.ng0 > a.ngmax {
         return Err(AppError::Usage(format!(
@@ -337,6 +960,8 @@ fn run(a: RunArgs) -> Result<(), AppError> {
             a.ng0, a.ngmax
         )));
     }
+    // Output options are checked before any folder is made.
+    outputs(&a, String::new(), f64::NEG_INFINITY)?;
     let out = a
         .out
         .clone()
@@ -386,8 +1011,47 @@ fn run(a: RunArgs) -> Result<(), AppError> {
     // The case applies its own scheme with what the command line
     // overrides; each rank builds only its share of the particles.
     let share = cases::Share { rank, ranks };
-    let scene = case.setup_share(side, config, &scheme_overrides(&a)?, share)?;
+    let mut scene = case.setup_share(side, config, &scheme_overrides(&a)?, share)?;
     scene.config.scheme.validate()?;
+    let switches = scene.config.scheme.switches().is_some();
+    // A checkpoint, or a snapshot as initial conditions, replaces the
+    // case's particles (each rank reads only its share).
+    let loaded = match &a.restart {
+        Some(spec) => Some(checkpoint::load(&comm, spec)?),
+        None => None,
+    };
+    if let Some(l) = &loaded {
+        if l.case.as_deref().is_some_and(|c| c != case.name()) {
+            return Err(AppError::Usage(format!(
+                "--restart {}: the checkpoint is of case '{}', not '{}'",
+                l.path.display(),
+                l.case.as_deref().unwrap_or(""),
+                case.name()
+            )));
+        }
+        scene.particles = checkpoint::particles(&l.rows, scene.config.fields(), switches, &l.path)?;
+        scene.total = l.total;
+        scene.bbox = l.bbox;
+    } else if let Some(spec) = &a.init {
+        let (p, total, bbox) =
+            init_particles(&comm, spec, scene.config.fields(), scene.bbox.boundary())?;
+        scene.particles = p;
+        scene.total = total;
+        if let Some(b) = bbox {
+            scene.bbox = b;
+        }
+    }
+    let resolved = resolved_config(&a, case.name(), side, stop, &out, &scene.config);
+    let config_text = toml::to_string(&resolved).expect("a TOML table serialises");
+    if root {
+        let path = out.join("config.toml");
+        std::fs::write(&path, &config_text).map_err(|e| AppError::io(&path, e))?;
+    }
+    let outputs = outputs(
+        &a,
+        config_text,
+        loaded.as_ref().map_or(f64::NEG_INFINITY, |l| l.state.t),
+    )?;
     let n = scene.total;
     if !a.quiet && root {
         eprintln!(
@@ -402,12 +1066,15 @@ fn run(a: RunArgs) -> Result<(), AppError> {
     } else {
         Progress::Auto
     };
-    let result = Simulation::with_comm(scene, kernel, kernel_choice.to_string(), comm).and_then(
-        |mut sim| {
-            sim.set_write_particles(a.write_particles);
-            sim.run(stop, &out, progress)
-        },
-    );
+    let sim = match &loaded {
+        Some(l) => Simulation::resume(scene, kernel, kernel_choice.to_string(), comm, l.state),
+        None => Simulation::with_comm(scene, kernel, kernel_choice.to_string(), comm),
+    };
+    let result = sim.and_then(|mut sim| {
+        sim.set_write_particles(a.write_particles);
+        sim.set_outputs(outputs)?;
+        sim.run(stop, &out, progress)
+    });
     let s = match result {
         Ok(s) => s,
         Err(e) if ranks > 1 => {

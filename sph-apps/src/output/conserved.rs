@@ -22,6 +22,28 @@ impl ConservedCsv {
         Ok(Self(f))
     }
 
+    /// Continues the file of a run resumed after step `last_step`: keeps
+    /// its header and its lines of steps up to `last_step` (those of a run
+    /// that went further before it stopped are dropped), or starts a new
+    /// file with the header when there is none.
+    pub fn resume(path: &Path, last_step: u64) -> Result<Self, AppError> {
+        let old = match std::fs::read_to_string(path) {
+            Ok(text) => text,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => String::new(),
+            Err(e) => return Err(AppError::io(path, e)),
+        };
+        let mut f = CsvFile::create(path)?;
+        f.line(HEADER)?;
+        for line in old.lines().filter(|l| *l != HEADER) {
+            let step = line.split(',').next().and_then(|s| s.parse::<u64>().ok());
+            // Only complete lines (16 columns) of earlier steps.
+            if step.is_some_and(|s| s <= last_step) && line.split(',').count() == 16 {
+                f.line(line)?;
+            }
+        }
+        Ok(Self(f))
+    }
+
     /// One line for the step `r` of a run with `total` particles (energies,
     /// momentum and angular momentum in `{:.17e}`; the mean neighbour count
     /// per particle).

@@ -10,6 +10,7 @@
 //! | `energies.png` | [`energies`] | rank 0, from the per-step energies |
 //! | `particles.csv` | [`particles`] | rank 0, streamed from every rank in bounded chunks |
 //! | `summary.json` | [`summary`] | rank 0, last |
+//! | `snapshots/snapshot_SSSSSSSS.h5`, `checkpoints/checkpoint_SSSSSSSS.h5` | [`snapshot`], [`crate::checkpoint`] | every rank its own rows, into one file |
 
 pub mod conserved;
 mod csv;
@@ -17,6 +18,7 @@ pub mod energies;
 pub mod particles;
 pub mod profile;
 pub mod progress;
+pub mod snapshot;
 pub mod summary;
 pub mod timings;
 

@@ -1,0 +1,254 @@
+//! Checkpoints: every persistent field of every particle and the run state
+//! of the integrator, so that a run continues from one to the bit
+//! (`sphexa run --restart FILE[:STEP]`).
+//!
+//! A checkpoint is a snapshot file ([`crate::output::snapshot`]: H5Part,
+//! one step group, every rank writing its rows) with
+//!
+//! - the fields the next step reads before it writes them: `id`, `x`, `y`,
+//!   `z`, `vx`, `vy`, `vz`, `h`, `m`, `u`, the integrator's history `dx`,
+//!   `dy`, `dz` (last position change) and `du_prev` (last du/dt), and,
+//!   where the run has them, `alpha` (AV switches) and `rho0`, `p0` (the
+//!   per-particle reference state of a referenced equation of state).
+//!   Density, pressure, the IAD matrices, Omega, accelerations and the
+//!   gravitational potential are recomputed by every step and not stored.
+//! - attributes: `iteration` (steps done), `time`, `minDt` (the last step,
+//!   the integrator's `dt_{n-1}`), the box, `h_next_max` (the largest h
+//!   after the last update, which the next step's halos use; NaN before the
+//!   first step), `sphexa_kind` = `checkpoint`, `case`, and `config`: the
+//!   run's resolved configuration as TOML (what `--restart` runs with).
+//!
+//! Everything is stored in full `f64`/`u64` precision, so nothing is lost.
+
+use crate::output::snapshot::{self, field};
+use crate::AppError;
+use sph_comm::Communicator;
+use sph_core::{FieldSet, Particles, RunState};
+use sph_io::{Attr, FieldData, H5Part, Selection, Snapshot, SnapshotReader};
+use sph_tree::BoundingBox;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+/// Value of attribute `sphexa_kind` in checkpoints.
+pub const KIND: &str = "checkpoint";
+
+/// The checkpoint fields of particles `p` (see the [module docs](self)).
+pub fn fields(p: &Particles) -> Vec<&'static str> {
+    let mut names = vec![
+        "id", "x", "y", "z", "vx", "vy", "vz", "h", "m", "u", "dx", "dy", "dz", "du_prev",
+    ];
+    if !p.alpha.is_empty() {
+        names.push("alpha");
+    }
+    if !p.eos_ref[0].is_empty() {
+        names.extend(["rho0", "p0"]);
+    }
+    names
+}
+
+/// The checkpoint of this rank's particles `owned` of `p` with the run
+/// state `s` and box `bbox`, carrying `attrs` (run settings) too.
+pub fn snapshot(
+    p: &Particles,
+    owned: Range<usize>,
+    s: RunState,
+    bbox: &BoundingBox,
+    attrs: &[(String, Attr)],
+) -> Snapshot {
+    let mut snap = Snapshot::new(s.step, s.t, s.dt_prev, snapshot::box_spec(bbox));
+    for (name, value) in attrs {
+        snap.set_attr(name, value.clone());
+    }
+    snap.set_attr("sphexa_kind", Attr::Str(KIND.into()))
+        .set_attr("h_next_max", Attr::F64(s.h_next_max.unwrap_or(f64::NAN)));
+    for name in fields(p) {
+        if let Some(data) = field(p, owned.clone(), name) {
+            snap.set_field(name, data);
+        }
+    }
+    snap
+}
+
+/// A checkpoint as read by one rank: its share of the particles and what
+/// the whole run continues from.
+#[derive(Debug)]
+pub struct Loaded {
+    /// The file.
+    pub path: PathBuf,
+    /// Run state of the integrator.
+    pub state: RunState,
+    /// Simulation box.
+    pub bbox: BoundingBox,
+    /// Particles of all ranks.
+    pub total: usize,
+    /// This rank's rows (every checkpoint field).
+    pub rows: Snapshot,
+    /// The run's resolved configuration (TOML), if stored.
+    pub config: Option<String>,
+    /// The case, if stored.
+    pub case: Option<String>,
+}
+
+/// Splits `FILE[:STEP]` into the file and the step, if given (`FILE` is
+/// taken whole when it exists as it is or its suffix is not a number).
+pub fn split_spec(spec: &str) -> Result<(PathBuf, Option<u64>), AppError> {
+    if Path::new(spec).exists() {
+        return Ok((PathBuf::from(spec), None));
+    }
+    match spec.rsplit_once(':') {
+        Some((file, step)) if !file.is_empty() && step.chars().all(|c| c.is_ascii_digit()) => {
+            let step = step.parse::<u64>().map_err(|_| {
+                AppError::Usage(format!("'{spec}': step '{step}' is not a whole number"))
+            })?;
+            Ok((PathBuf::from(file), Some(step)))
+        }
+        _ => Ok((PathBuf::from(spec), None)),
+    }
+}
+
+/// Index of the step group of `path` whose `iteration` is `step` (the last
+/// group when `step` is `None`).
+pub fn group_of_step(path: &Path, step: Option<u64>) -> Result<usize, AppError> {
+    let count = H5Part.step_count(path).map_err(snapshot::io_error)?;
+    if count == 0 {
+        return Err(AppError::Usage(format!(
+            "{}: the file holds no step group",
+            path.display()
+        )));
+    }
+    let Some(step) = step else {
+        return Ok(count - 1);
+    };
+    let mut found = Vec::with_capacity(count);
+    for k in 0..count {
+        let meta = H5Part
+            .read_step(path, k, &Selection::Names(Vec::new()))
+            .map_err(snapshot::io_error)?;
+        if meta.step == step {
+            return Ok(k);
+        }
+        found.push(meta.step.to_string());
+    }
+    Err(AppError::Usage(format!(
+        "{}: no step {step}; the file holds step(s) {}",
+        path.display(),
+        found.join(", ")
+    )))
+}
+
+/// Reads this rank's share of the checkpoint `spec` (`FILE[:STEP]`).
+/// Collective.
+///
+/// # Errors
+/// A missing or corrupted file, a file that is not a checkpoint, a missing
+/// field, named.
+pub fn load<C: Communicator>(comm: &C, spec: &str) -> Result<Loaded, AppError> {
+    let (path, step) = split_spec(spec)?;
+    let index = group_of_step(&path, step)?;
+    let (rows, total) = snapshot::read_share(comm, &path, index, &Selection::All)?;
+    let text = |name: &str| match rows.attr(name) {
+        Some(Attr::Str(s)) => Some(s.clone()),
+        _ => None,
+    };
+    if text("sphexa_kind").as_deref() != Some(KIND) {
+        return Err(AppError::Usage(format!(
+            "{}: not a checkpoint (attribute sphexa_kind is not '{KIND}'); a snapshot can start a case with --init",
+            path.display()
+        )));
+    }
+    let h_next_max = match rows.attr("h_next_max") {
+        Some(Attr::F64(h)) if h.is_finite() => Some(*h),
+        _ => None,
+    };
+    let state = RunState {
+        step: rows.step,
+        t: rows.time,
+        dt_prev: rows.dt,
+        h_next_max,
+    };
+    let bbox = snapshot::bounding_box(&rows.bbox)?;
+    let total = usize::try_from(total)
+        .map_err(|_| AppError::Usage(format!("{}: {total} particles", path.display())))?;
+    Ok(Loaded {
+        path,
+        state,
+        bbox,
+        total,
+        config: text("config"),
+        case: text("case"),
+        rows,
+    })
+}
+
+/// Particles with the optional `fields` and, from `rows`, every value a
+/// checkpoint stores (`alpha` enables the AV-switch field); fields not in
+/// `rows` stay zero.
+///
+/// # Errors
+/// A checkpoint field missing from `rows` or of the wrong type, named.
+pub fn particles(
+    rows: &Snapshot,
+    fields: FieldSet,
+    alpha: bool,
+    path: &Path,
+) -> Result<Particles, AppError> {
+    let n = rows.len();
+    let mut p = Particles::new(n, fields);
+    if alpha {
+        p.enable_alpha(0.0);
+    }
+    let referenced = rows.field("rho0").is_some();
+    if referenced {
+        p.eos_ref = [vec![0.0; n], vec![0.0; n]];
+    }
+    let missing = |name: &str| {
+        AppError::Usage(format!(
+            "{}: the checkpoint has no field '{name}' of the right type (it holds: {})",
+            path.display(),
+            rows.fields
+                .iter()
+                .map(|f| f.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ))
+    };
+    match rows.field("id") {
+        Some(FieldData::U64(v)) => p.id.copy_from_slice(v),
+        _ => return Err(missing("id")),
+    }
+    let mut names = vec![
+        "x", "y", "z", "vx", "vy", "vz", "h", "m", "u", "dx", "dy", "dz", "du_prev",
+    ];
+    if alpha {
+        names.push("alpha");
+    }
+    if referenced {
+        names.extend(["rho0", "p0"]);
+    }
+    for name in names {
+        let src = rows
+            .field(name)
+            .and_then(FieldData::as_f64)
+            .ok_or_else(|| missing(name))?;
+        let dst = match name {
+            "x" => &mut p.x,
+            "y" => &mut p.y,
+            "z" => &mut p.z,
+            "vx" => &mut p.vx,
+            "vy" => &mut p.vy,
+            "vz" => &mut p.vz,
+            "h" => &mut p.h,
+            "m" => &mut p.m,
+            "u" => &mut p.u,
+            "dx" => &mut p.dx,
+            "dy" => &mut p.dy,
+            "dz" => &mut p.dz,
+            "du_prev" => &mut p.du_prev,
+            "alpha" => &mut p.alpha,
+            "rho0" => &mut p.eos_ref[0],
+            _ => &mut p.eos_ref[1],
+        };
+        dst.copy_from_slice(src);
+    }
+    Ok(p)
+}

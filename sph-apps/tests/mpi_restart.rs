@@ -1,0 +1,194 @@
+//! Checkpoints across rank counts (built only with `--features mpi`; run by
+//! `cargo test -p sph-apps --features mpi --test mpi_restart`): a Sedov run
+//! on 2 ranks writes a checkpoint at step 10 and a snapshot at step 20; the
+//! checkpoint, restarted on 1 and on 4 ranks, gives the conserved
+//! quantities and the step-20 snapshot of the uninterrupted serial run to
+//! the bit, and the snapshot written by 2 ranks holds the serial run's
+//! particles in the same order.
+
+use sph_io::{H5Part, Selection, Snapshot, SnapshotReader};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn mpirun(ranks: usize, args: &[&str]) {
+    let version = Command::new("mpirun").arg("--version").output();
+    let open_mpi = version.as_ref().is_ok_and(|v| {
+        let t = String::from_utf8_lossy(&v.stdout) + String::from_utf8_lossy(&v.stderr);
+        t.contains("Open MPI") || t.contains("OpenRTE")
+    });
+    let mut c = Command::new("mpirun");
+    c.arg("-n").arg(ranks.to_string());
+    if open_mpi {
+        c.args(["--oversubscribe", "--allow-run-as-root"]);
+        c.env("OMPI_MCA_btl_vader_single_copy_mechanism", "none");
+    }
+    c.arg(env!("CARGO_BIN_EXE_sphexa")).arg("run").args(args);
+    let out = c.output().expect("mpirun runs (install openmpi-bin)");
+    assert!(
+        out.status.success(),
+        "mpirun -n {ranks} sphexa run {args:?} failed:\n{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+fn read(path: &Path) -> Snapshot {
+    let mut s = H5Part
+        .read_step(path, 0, &Selection::All)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    s.attrs.retain(|(n, _)| n != "config");
+    s
+}
+
+fn refs(v: &[String]) -> Vec<&str> {
+    v.iter().map(String::as_str).collect()
+}
+
+fn lines_after(path: &Path, step: usize) -> Vec<String> {
+    std::fs::read_to_string(path.join("conserved.csv"))
+        .expect("conserved.csv")
+        .lines()
+        .skip(1 + step)
+        .map(str::to_owned)
+        .collect()
+}
+
+#[test]
+fn written_on_two_ranks_restarted_on_one_and_four() {
+    let root = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("mpi-restart");
+    std::fs::remove_dir_all(&root).ok();
+    let dir = |n: &str| root.join(n).to_str().expect("UTF-8").to_owned();
+    let common = [
+        "sedov",
+        "-n",
+        "16",
+        "-q",
+        "--threads",
+        "1",
+        "--checkpoint-every",
+        "10",
+        "--snapshot-every-steps",
+        "20",
+    ];
+    let with = |out: &str, extra: &[&str]| {
+        let mut v: Vec<String> = common.iter().map(|s| s.to_string()).collect();
+        v.extend(["--out".into(), out.to_owned()]);
+        v.extend(extra.iter().map(|s| s.to_string()));
+        v
+    };
+    mpirun(1, &refs(&with(&dir("serial"), &["--steps", "20"])));
+    mpirun(2, &refs(&with(&dir("two"), &["--steps", "20"])));
+    let ckpt = root.join("two/checkpoints/checkpoint_00000010.h5");
+    let ckpt = ckpt.to_str().expect("UTF-8");
+    for ranks in [1, 4] {
+        let out = dir(&format!("restart-{ranks}"));
+        mpirun(ranks, &["--restart", ckpt, "--steps", "20", "--out", &out]);
+    }
+    let serial = root.join("serial");
+    let want_lines = lines_after(&serial, 10);
+    assert_eq!(want_lines.len(), 10);
+    let want = read(&serial.join("snapshots/snapshot_00000020.h5"));
+    assert_eq!(want.len(), 4096);
+    let two = read(&root.join("two/snapshots/snapshot_00000020.h5"));
+    assert!(
+        two.bits_eq(&want),
+        "the 2-rank snapshot differs from the serial one"
+    );
+    assert_eq!(lines_after(&root.join("two"), 0), lines_after(&serial, 0));
+    for ranks in [1, 4] {
+        let d = root.join(format!("restart-{ranks}"));
+        assert_eq!(
+            lines_after(&d, 0),
+            want_lines,
+            "{ranks} ranks: conserved.csv"
+        );
+        let got = read(&d.join("snapshots/snapshot_00000020.h5"));
+        assert!(
+            got.bits_eq(&want),
+            "{ranks} ranks: the step-20 snapshot differs"
+        );
+    }
+}
+
+/// Initial conditions from files on several ranks, each rank reading its
+/// share: an SPH-EXA-layout file (no checksums) and one of our snapshots
+/// give on 2 ranks the conserved quantities of the serial run.
+#[test]
+fn initial_conditions_from_files_on_two_ranks() {
+    use hdf5_pure::{AttrValue, FileBuilder};
+    let root = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("mpi-init");
+    std::fs::remove_dir_all(&root).ok();
+    std::fs::create_dir_all(&root).unwrap();
+    let scene = sph_apps::cases::lookup("sedov")
+        .unwrap()
+        .setup(12, sph_core::HydroConfig::default())
+        .unwrap();
+    let p = &scene.particles;
+    let mut b = FileBuilder::new();
+    let mut g = b.create_group("Step#0");
+    g.set_attr("time", AttrValue::F64(0.0));
+    g.set_attr(
+        "box",
+        AttrValue::F64Array(vec![-0.5, 0.5, -0.5, 0.5, -0.5, 0.5]),
+    );
+    for (name, v) in [
+        ("x", &p.x),
+        ("y", &p.y),
+        ("z", &p.z),
+        ("h", &p.h),
+        ("m", &p.m),
+        ("u", &p.u),
+    ] {
+        g.create_dataset(name).with_f64_data(v);
+    }
+    b.add_group(g.finish());
+    let foreign = root.join("sphexa.h5");
+    std::fs::write(&foreign, b.finish().unwrap()).unwrap();
+    let dir = |n: &str| root.join(n).to_str().expect("UTF-8").to_owned();
+    let conserved = |n: &str| std::fs::read_to_string(root.join(n).join("conserved.csv")).unwrap();
+    let foreign = foreign.to_str().unwrap();
+    for ranks in [1, 2] {
+        let out = dir(&format!("foreign-{ranks}"));
+        mpirun(
+            ranks,
+            &[
+                "sedov",
+                "--init",
+                foreign,
+                "--steps",
+                "5",
+                "-q",
+                "--threads",
+                "1",
+                "--snapshot-every-steps",
+                "5",
+                "--out",
+                &out,
+            ],
+        );
+    }
+    assert_eq!(conserved("foreign-1").lines().count(), 6);
+    assert_eq!(conserved("foreign-1"), conserved("foreign-2"));
+    let ours = root.join("foreign-2/snapshots/snapshot_00000005.h5");
+    let ours = ours.to_str().unwrap();
+    for ranks in [1, 2] {
+        let out = dir(&format!("ours-{ranks}"));
+        mpirun(
+            ranks,
+            &[
+                "sedov",
+                "--init",
+                ours,
+                "--steps",
+                "3",
+                "-q",
+                "--threads",
+                "1",
+                "--out",
+                &out,
+            ],
+        );
+    }
+    assert_eq!(conserved("ours-1").lines().count(), 4);
+    assert_eq!(conserved("ours-1"), conserved("ours-2"));
+}

@@ -1,0 +1,546 @@
+//! Snapshots, checkpoints and configuration files through the `sphexa`
+//! binary: a restarted run continues to the bit, a run killed with SIGKILL
+//! while writing restarts from its last complete checkpoint, a run repeats
+//! from the `config.toml` it wrote, and SPH-EXA-layout files start a case.
+
+use sph_io::{FieldData, H5Part, Selection, Snapshot, SnapshotReader};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::time::{Duration, Instant};
+
+fn sphexa(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sphexa"))
+        .args(args)
+        .output()
+        .expect("the sphexa binary runs")
+}
+
+/// Runs `sphexa run ARGS` and expects success.
+fn ok(args: &[&str]) {
+    let mut all = vec!["run"];
+    all.extend_from_slice(args);
+    let out = sphexa(&all);
+    assert!(
+        out.status.success(),
+        "sphexa {all:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// Runs `sphexa run ARGS`, expects a refusal without a panic, returns stderr.
+fn refused(args: &[&str]) -> String {
+    let mut all = vec!["run"];
+    all.extend_from_slice(args);
+    let out = sphexa(&all);
+    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(!out.status.success(), "sphexa {all:?} succeeded");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    stderr
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("restart-{name}"));
+    std::fs::remove_dir_all(&dir).ok();
+    std::fs::create_dir_all(&dir).expect("scratch folder");
+    dir
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("UTF-8 path")
+}
+
+fn read(path: &Path) -> Snapshot {
+    H5Part
+        .read_step(path, 0, &Selection::All)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// The same particles in the same state: every field, step, time, dt and
+/// box to the bit (the `config` attribute records how each run was started
+/// and may differ).
+fn assert_same_state(a: &Snapshot, b: &Snapshot, what: &str) {
+    let mut a = a.clone();
+    let mut b = b.clone();
+    for x in [&mut a, &mut b] {
+        x.attrs.retain(|(n, _)| n != "config");
+    }
+    assert!(!a.fields.is_empty(), "{what}: no fields");
+    assert!(a.bits_eq(&b), "{what}: states differ");
+}
+
+/// Sedov 20^3: 40 steps in one run against 20 steps, then a restart from
+/// the checkpoint of step 20 for 20 more, in the same output folder.
+#[test]
+fn a_restarted_run_continues_bit_identically() {
+    let dir = scratch("sedov");
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    let common = [
+        "-n",
+        "20",
+        "-q",
+        "--checkpoint-every",
+        "20",
+        "--snapshot-every-steps",
+        "20",
+        "--snapshot-fields",
+        "id,x,y,z,vx,vy,vz,h,u,rho,p,du_prev",
+    ];
+    let run = |out: &Path, extra: &[&str]| {
+        let mut args = vec!["sedov", "--out", s(out)];
+        args.extend_from_slice(&common);
+        args.extend_from_slice(extra);
+        ok(&args);
+    };
+    run(&a, &["--steps", "40"]);
+    run(&b, &["--steps", "20"]);
+    let ckpt = b.join("checkpoints/checkpoint_00000020.h5");
+    // The restart takes case and options from the checkpoint.
+    ok(&["--restart", s(&ckpt), "--steps", "40", "-q"]);
+
+    let conserved = |d: &Path| std::fs::read_to_string(d.join("conserved.csv")).unwrap();
+    let (ca, cb) = (conserved(&a), conserved(&b));
+    assert_eq!(ca.lines().count(), 41, "header + 40 steps");
+    assert!(ca == cb, "conserved.csv differs:\n{ca}\n---\n{cb}");
+    for file in [
+        "snapshots/snapshot_00000040.h5",
+        "checkpoints/checkpoint_00000040.h5",
+    ] {
+        assert_same_state(&read(&a.join(file)), &read(&b.join(file)), file);
+    }
+    // The final snapshot holds what was asked, of every particle.
+    let snap = read(&a.join("snapshots/snapshot_00000040.h5"));
+    assert_eq!((snap.step, snap.len()), (40, 8000));
+    let mut ids = snap
+        .field("id")
+        .and_then(FieldData::as_u64)
+        .unwrap()
+        .to_vec();
+    ids.sort_unstable();
+    assert_eq!(ids, (0..8000).collect::<Vec<u64>>());
+    // A checkpoint restarts only a run of its own case.
+    let e = refused(&[
+        "noh",
+        "--restart",
+        s(&ckpt),
+        "--steps",
+        "21",
+        "-q",
+        "--out",
+        s(&dir.join("c")),
+    ]);
+    assert!(e.contains("sedov") && e.contains("noh"), "{e}");
+}
+
+/// Kill test: a run checkpointing every step is killed with SIGKILL while a
+/// checkpoint is being written (its `.tmp` exists); the newest complete
+/// checkpoint reads back and restarts, and the restarted run gives the
+/// conserved.csv of a run that was never interrupted.
+#[test]
+fn a_killed_run_restarts_from_its_last_complete_checkpoint() {
+    let dir = scratch("kill");
+    let (k, u) = (dir.join("killed"), dir.join("uninterrupted"));
+    let args = |out: &Path, steps: &str| -> Vec<String> {
+        [
+            "run",
+            "sedov",
+            "-n",
+            "16",
+            "-q",
+            "--checkpoint-every",
+            "1",
+            "--checkpoint-keep",
+            "3",
+            "--steps",
+            steps,
+            "--out",
+            s(out),
+        ]
+        .map(str::to_owned)
+        .to_vec()
+    };
+    let mut child = Command::new(env!("CARGO_BIN_EXE_sphexa"))
+        .args(args(&k, "100000"))
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("sphexa starts");
+    let ckdir = k.join("checkpoints");
+    let listing = |ext: &str| -> Vec<PathBuf> {
+        let mut v: Vec<PathBuf> = std::fs::read_dir(&ckdir)
+            .map(|d| d.filter_map(|e| e.ok()).map(|e| e.path()).collect())
+            .unwrap_or_default();
+        v.retain(|p| p.to_string_lossy().ends_with(ext));
+        v.sort();
+        v
+    };
+    let start = Instant::now();
+    let mut during_write = false;
+    loop {
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "no checkpoint in two minutes"
+        );
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the run ended by itself"
+        );
+        if listing(".h5").len() >= 3 {
+            if !listing(".h5.tmp").is_empty() {
+                during_write = true;
+                break;
+            }
+            if start.elapsed() > Duration::from_secs(60) {
+                break;
+            }
+        }
+        std::thread::yield_now();
+    }
+    child.kill().expect("SIGKILL"); // std's kill is SIGKILL on Unix
+    child.wait().unwrap();
+    eprintln!("killed while writing a checkpoint: {during_write}");
+    let complete = listing(".h5");
+    let last = complete.last().expect("a complete checkpoint").clone();
+    let name = last.file_name().unwrap().to_string_lossy().to_string();
+    let step: u64 = name["checkpoint_".len()..name.len() - 3].parse().unwrap();
+    // It reads back whole (checksums verified).
+    let ck = read(&last);
+    assert_eq!((ck.step, ck.len()), (step, 16 * 16 * 16));
+    // It restarts, into the same folder, for 3 more steps.
+    let target = (step + 3).to_string();
+    ok(&["--restart", s(&last), "--steps", &target, "-q"]);
+    let mut uargs = args(&u, &target);
+    uargs.remove(0);
+    let uargs: Vec<&str> = uargs.iter().map(String::as_str).collect();
+    ok(&uargs);
+    let conserved = |d: &Path| std::fs::read_to_string(d.join("conserved.csv")).unwrap();
+    assert_eq!(conserved(&k).lines().count() as u64, step + 4);
+    assert!(conserved(&k) == conserved(&u), "the restarted run differs");
+}
+
+#[test]
+fn a_run_repeats_from_its_config_and_the_command_line_overrides_the_file() {
+    let dir = scratch("config");
+    let file = dir.join("run.toml");
+    std::fs::write(
+        &file,
+        format!(
+            "case = \"sedov\"\nside = 8\nsteps = 5\nalpha = 0.5\nav-switches = \"on\"\nquiet = true\nsnapshot-at = [0.0]\nout = \"{}\"\n",
+            s(&dir.join("never"))
+        ),
+    )
+    .unwrap();
+    let first = dir.join("first");
+    ok(&["--config", s(&file), "--steps", "3", "--out", s(&first)]);
+    let conserved = |d: &Path| std::fs::read_to_string(d.join("conserved.csv")).unwrap();
+    assert_eq!(
+        conserved(&first).lines().count(),
+        4,
+        "--steps 3 overrides steps = 5"
+    );
+    assert!(!dir.join("never").exists(), "--out overrides out");
+    let resolved = std::fs::read_to_string(first.join("config.toml")).unwrap();
+    for line in [
+        "steps = 3",
+        "alpha = 0.5",
+        "av-switches = \"on\"",
+        "side = 8",
+        "case = \"sedov\"",
+    ] {
+        assert!(
+            resolved.lines().any(|l| l == line),
+            "{line} not in\n{resolved}"
+        );
+    }
+    // A snapshot at t = 0 comes after step 1, with the run's settings.
+    let snap = read(&first.join("snapshots/snapshot_00000001.h5"));
+    assert!(matches!(snap.attr("config"), Some(sph_io::Attr::Str(c)) if *c == resolved));
+    // The resolved configuration repeats the run (into another folder).
+    let again = dir.join("again");
+    ok(&[
+        "--config",
+        s(&first.join("config.toml")),
+        "--out",
+        s(&again),
+    ]);
+    assert_eq!(conserved(&first), conserved(&again));
+    // And it differs from the defaults (the file's alpha and switches apply).
+    let plain = dir.join("plain");
+    ok(&["sedov", "-n", "8", "--steps", "3", "-q", "--out", s(&plain)]);
+    assert_ne!(conserved(&first), conserved(&plain));
+}
+
+#[test]
+fn bad_configuration_files_are_named_with_what_is_allowed() {
+    let dir = scratch("bad-config");
+    let file = dir.join("bad.toml");
+    let check = |text: &str, words: &[&str]| {
+        std::fs::write(&file, text).unwrap();
+        let e = refused(&["--config", s(&file)]);
+        for w in words {
+            assert!(e.contains(w), "{w:?} missing from: {e}");
+        }
+    };
+    check(
+        "case = \"sedov\"\nsides = 8\n",
+        &[
+            "bad.toml",
+            "'sides'",
+            "allowed keys",
+            "side",
+            "end-time",
+            "snapshot-fields",
+        ],
+    );
+    check(
+        "case = \"sedov\"\nside = 0\n",
+        &["bad.toml", "'side'", "4 to 1000"],
+    );
+    check("case = \"sedov\"\nalpha = \"lots\"\n", &["'alpha'", ">= 0"]);
+    check(
+        "case = \"sedov\"\nquiet = 1\n",
+        &["'quiet'", "true or false"],
+    );
+    check("side = [", &["bad.toml", "TOML"]);
+    check("side = 8\n", &["no case"]);
+    let e = refused(&[
+        "sedov",
+        "--snapshot-fields",
+        "x,density",
+        "--snapshot-every-steps",
+        "1",
+    ]);
+    assert!(e.contains("'density'") && e.contains("rho"), "{e}");
+    let e = refused(&[
+        "sedov",
+        "-n",
+        "8",
+        "--steps",
+        "1",
+        "-q",
+        "--snapshot-fields",
+        "alpha",
+        "--snapshot-every-steps",
+        "1",
+        "--out",
+        s(&dir.join("o")),
+    ]);
+    assert!(e.contains("'alpha'"), "{e}");
+    let e = refused(&["sedov", "--checkpoint-every", "auto"]);
+    assert!(e.contains("--mtbf"), "{e}");
+    let e = refused(&["sedov", "--checkpoint-every", "often"]);
+    assert!(
+        e.contains("'often'") && e.contains("time:T") && e.contains("auto"),
+        "{e}"
+    );
+    let e = refused(&["sedov", "--checkpoint-every", "auto", "--mtbf", "soon"]);
+    assert!(e.contains("'soon'") && e.contains("6h"), "{e}");
+    let e = refused(&["--restart", s(&dir.join("missing.h5"))]);
+    assert!(e.contains("missing.h5"), "{e}");
+}
+
+/// Young/Daly: the interval is sqrt(2 C M) with C the measured write time.
+#[test]
+fn auto_checkpoints_report_the_young_daly_interval() {
+    let dir = scratch("auto");
+    ok(&[
+        "sedov",
+        "-n",
+        "8",
+        "--steps",
+        "4",
+        "-q",
+        "--checkpoint-every",
+        "auto",
+        "--mtbf",
+        "1h",
+        "--out",
+        s(&dir),
+    ]);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let io = &summary["io"];
+    let c = io["checkpoint_seconds_mean"].as_f64().unwrap();
+    let interval = io["checkpoint_interval_s"].as_f64().unwrap();
+    // One checkpoint (after step 1, to measure C); the next is sqrt(2 C M)
+    // away, far beyond this 4-step run.
+    assert_eq!(io["checkpoints"].as_u64(), Some(1));
+    assert!(
+        ((interval * interval) / (2.0 * c * 3600.0) - 1.0).abs() < 1e-9,
+        "{io}"
+    );
+}
+
+/// An SPH-EXA-layout file (group Step#0, 1-D datasets named as SPH-EXA
+/// names them, no checksums, no `id`, attributes `time`, `iteration`,
+/// `minDt`, `box`) holding the Sedov initial state starts the case: the run
+/// is the one the case makes itself.
+#[test]
+fn an_sphexa_layout_file_is_read_as_initial_conditions() {
+    use hdf5_pure::{AttrValue, FileBuilder};
+    let dir = scratch("init");
+    let side = 10;
+    let scene = sph_apps::cases::lookup("sedov")
+        .unwrap()
+        .setup(side, sph_core::HydroConfig::default())
+        .unwrap();
+    let p = &scene.particles;
+    let mut b = FileBuilder::new();
+    let mut g = b.create_group("Step#0");
+    g.set_attr("time", AttrValue::F64(0.0));
+    g.set_attr("iteration", AttrValue::I64(0));
+    g.set_attr("minDt", AttrValue::F64(1e-6));
+    g.set_attr(
+        "box",
+        AttrValue::F64Array(vec![-0.5, 0.5, -0.5, 0.5, -0.5, 0.5]),
+    );
+    for (name, v) in [
+        ("x", &p.x),
+        ("y", &p.y),
+        ("z", &p.z),
+        ("vx", &p.vx),
+        ("vy", &p.vy),
+        ("vz", &p.vz),
+        ("h", &p.h),
+        ("m", &p.m),
+        ("u", &p.u),
+    ] {
+        g.create_dataset(name).with_f64_data(v);
+    }
+    b.add_group(g.finish());
+    let file = dir.join("sedov_ic.h5");
+    std::fs::write(&file, b.finish().unwrap()).unwrap();
+    let (from_file, own) = (dir.join("from-file"), dir.join("own"));
+    ok(&[
+        "sedov",
+        "--init",
+        s(&file),
+        "--steps",
+        "3",
+        "-q",
+        "--out",
+        s(&from_file),
+    ]);
+    ok(&["sedov", "-n", "10", "--steps", "3", "-q", "--out", s(&own)]);
+    let conserved = |d: &Path| std::fs::read_to_string(d.join("conserved.csv")).unwrap();
+    assert_eq!(conserved(&from_file).lines().count(), 4);
+    assert_eq!(conserved(&from_file), conserved(&own));
+    // A file without u is refused, naming the field.
+    let mut b = FileBuilder::new();
+    let mut g = b.create_group("Step#0");
+    for name in ["x", "y", "z", "h", "m"] {
+        g.create_dataset(name).with_f64_data(&p.x);
+    }
+    b.add_group(g.finish());
+    let bad = dir.join("no_u.h5");
+    std::fs::write(&bad, b.finish().unwrap()).unwrap();
+    let e = refused(&[
+        "sedov",
+        "--init",
+        s(&bad),
+        "--steps",
+        "1",
+        "-q",
+        "--out",
+        s(&own),
+    ]);
+    assert!(e.contains("'u'") && e.contains("no_u.h5"), "{e}");
+}
+
+/// Every registered case (AV switches, self-gravity with an open box that
+/// grows, a referenced equation of state, conductivity) restarts to the
+/// bit: 6 steps against 3 + restart + 3.
+#[test]
+fn every_case_restarts_bit_identically() {
+    for case in sph_apps::cases::names() {
+        let dir = scratch(&format!("case-{case}"));
+        let (a, b) = (dir.join("a"), dir.join("b"));
+        let run = |out: &Path, steps: &str| {
+            ok(&[
+                case,
+                "-n",
+                "8",
+                "-q",
+                "--checkpoint-every",
+                "3",
+                "--steps",
+                steps,
+                "--out",
+                s(out),
+            ]);
+        };
+        run(&a, "6");
+        run(&b, "3");
+        let ckpt = b.join("checkpoints/checkpoint_00000003.h5");
+        ok(&["--restart", s(&ckpt), "--steps", "6", "-q"]);
+        let conserved = |d: &Path| std::fs::read_to_string(d.join("conserved.csv")).unwrap();
+        assert_eq!(conserved(&a).lines().count(), 7, "{case}");
+        assert!(
+            conserved(&a) == conserved(&b),
+            "{case}: conserved.csv differs"
+        );
+        let file = "checkpoints/checkpoint_00000006.h5";
+        assert_same_state(&read(&a.join(file)), &read(&b.join(file)), case);
+    }
+}
+
+/// One of our own snapshots (default fields) starts a case: the first line
+/// of conserved.csv holds the kinetic and internal energy of the file's
+/// particles, summed here from the file.
+#[test]
+fn our_snapshot_is_read_as_initial_conditions() {
+    let dir = scratch("init-ours");
+    let first = dir.join("first");
+    ok(&[
+        "sedov",
+        "-n",
+        "8",
+        "--steps",
+        "4",
+        "-q",
+        "--snapshot-every-steps",
+        "4",
+        "--out",
+        s(&first),
+    ]);
+    let file = first.join("snapshots/snapshot_00000004.h5");
+    let snap = read(&file);
+    let f = |n: &str| snap.field(n).and_then(FieldData::as_f64).unwrap().to_vec();
+    let (m, u) = (f("m"), f("u"));
+    let (vx, vy, vz) = (f("vx"), f("vy"), f("vz"));
+    let e_kin: f64 = (0..m.len())
+        .map(|i| 0.5 * m[i] * (vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i]))
+        .sum();
+    let e_int: f64 = (0..m.len()).map(|i| m[i] * u[i]).sum();
+    assert!(e_kin > 0.0, "the blast has started moving");
+    let second = dir.join("second");
+    ok(&[
+        "sedov",
+        "--init",
+        s(&file),
+        "--steps",
+        "1",
+        "-q",
+        "--out",
+        s(&second),
+    ]);
+    let text = std::fs::read_to_string(second.join("conserved.csv")).unwrap();
+    let row: Vec<f64> = text
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .map(|x| x.parse().unwrap())
+        .collect();
+    // step, t, dt, E_kin, E_int, ...: time starts at 0 again.
+    assert_eq!((row[0], row[1]), (1.0, 0.0));
+    assert!(
+        (row[3] / e_kin - 1.0).abs() < 1e-12,
+        "E_kin {} vs {e_kin}",
+        row[3]
+    );
+    assert!(
+        (row[4] / e_int - 1.0).abs() < 1e-12,
+        "E_int {} vs {e_int}",
+        row[4]
+    );
+}
