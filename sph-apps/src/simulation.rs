@@ -682,7 +682,9 @@ impl<C: Communicator> Simulation<C> {
                     Some(rho_shocked),
                 )
             }
-            Some(Reference::Vortex(_)) | None => (None, None, None, None),
+            Some(Reference::Vortex(_) | Reference::Stationary(_)) | None => {
+                (None, None, None, None)
+            }
         };
         Ok(EndState {
             t,

@@ -45,6 +45,7 @@ registry! {
     evrard::EvrardCollapse,
     sod::SodTube,
     gresho::GreshoVortex,
+    isobaric_cube::IsobaricCube,
 }
 
 /// Every case, in listing order (the same as [`CASES`]).
@@ -292,6 +293,43 @@ pub enum Reference {
     /// cylindrical radius, the speed `v_phi`; compared out to
     /// [`VORTEX_EXTENT`].
     Vortex(Gresho),
+    /// A cube of one gas in another at rest ([`Stationary`]).
+    Stationary(Stationary),
+}
+
+/// Gas at rest: `inner` (density, pressure) where the max norm of the
+/// position is below `half`, `outer` elsewhere. The coordinate is that max
+/// norm, `max(|x|, |y|, |z|)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stationary {
+    /// Density and pressure inside.
+    pub inner: [f64; 2],
+    /// Density and pressure outside.
+    pub outer: [f64; 2],
+    /// Half the side of the inner cube.
+    pub half: f64,
+    /// Adiabatic index (for the internal energy).
+    pub gamma: f64,
+}
+
+impl Stationary {
+    /// The state at max-norm distance `r`.
+    pub fn state(&self, r: f64) -> FlowState {
+        if r.is_nan() {
+            return FlowState::NAN;
+        }
+        let [rho, p] = if r < self.half {
+            self.inner
+        } else {
+            self.outer
+        };
+        FlowState {
+            rho,
+            p,
+            v: 0.0,
+            u: p / ((self.gamma - 1.0) * rho),
+        }
+    }
 }
 
 /// Cylindrical radius out to which a vortex's L1 errors are taken (the
@@ -331,6 +369,7 @@ impl Reference {
             Reference::Sedov(_) | Reference::Noh(_) => nalgebra::Vector3::from(pos).norm(),
             Reference::Tube(_) => pos[0].abs(),
             Reference::Vortex(_) => pos[0].hypot(pos[1]),
+            Reference::Stationary(_) => pos.iter().fold(0.0f64, |m, c| m.max(c.abs())),
         }
     }
 
@@ -346,7 +385,9 @@ impl Reference {
     /// `|v|` for the spherical solutions, `sign(x) v_x` for the tube.
     pub fn flow_speed(&self, pos: [f64; 3], vel: [f64; 3]) -> f64 {
         match self {
-            Reference::Sedov(_) | Reference::Noh(_) => nalgebra::Vector3::from(vel).norm(),
+            Reference::Sedov(_) | Reference::Noh(_) | Reference::Stationary(_) => {
+                nalgebra::Vector3::from(vel).norm()
+            }
             Reference::Tube(_) => {
                 if pos[0] < 0.0 {
                     -vel[0]
@@ -369,7 +410,7 @@ impl Reference {
     /// solutions, the signed velocity along the folded tube.
     pub fn reference_speed(&self, state: &FlowState) -> f64 {
         match self {
-            Reference::Sedov(_) | Reference::Noh(_) => state.v.abs(),
+            Reference::Sedov(_) | Reference::Noh(_) | Reference::Stationary(_) => state.v.abs(),
             Reference::Tube(_) | Reference::Vortex(_) => state.v,
         }
     }
@@ -382,6 +423,7 @@ impl Reference {
             Reference::Noh(n) => n.state(r, t),
             Reference::Tube(tube) => tube.riemann.state(r - tube.interface, t),
             Reference::Vortex(g) => g.state(r),
+            Reference::Stationary(s) => s.state(r),
         }
     }
 
@@ -392,7 +434,7 @@ impl Reference {
             Reference::Sedov(s) => Some(s.shock_radius(t)),
             Reference::Noh(n) => Some(n.shock_radius(t)),
             Reference::Tube(tube) => Some(tube.shock_position(t)),
-            Reference::Vortex(_) => None,
+            Reference::Vortex(_) | Reference::Stationary(_) => None,
         }
     }
 }
