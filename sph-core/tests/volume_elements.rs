@@ -4,6 +4,7 @@
 //! pressure work of linear fields, against the exact `-grad P / rho` and
 //! `-(P / rho) div v`.
 
+use proptest::prelude::*;
 use sph_core::density::{density, ve_density, xmass, Positions, VeOut};
 use sph_core::iad::iad_volumes;
 use sph_core::momentum::{
@@ -39,6 +40,7 @@ struct Setup {
     p: Particles,
     bbox: BoundingBox,
     list: CompactNeighborList,
+    keys: Vec<u64>,
     /// The standard density `sum_j m_j W_ij`.
     rho0: Vec<f64>,
     xm: Vec<f64>,
@@ -78,14 +80,31 @@ fn lattice_waved(n: usize, jitter: f64, wave: f64, periodic: bool, seed: u64) ->
     KeySorter::new().sort(&keys, None, &mut perm);
     p.reorder(&perm, &mut Vec::new());
     apply_permutation(&perm, &mut keys, &mut Vec::new());
-    let tree = Octree::build(&keys, &p.x, &p.y, &p.z, 16).unwrap();
-    let mut list = CompactNeighborList::new();
+    let mut s = Setup {
+        p,
+        bbox,
+        list: CompactNeighborList::new(),
+        keys,
+        rho0: vec![0.0; np],
+        xm: vec![0.0; np],
+        kx: vec![0.0; np],
+    };
+    refresh(&mut s);
+    s
+}
+
+/// Symmetric lists for the current h, then `rho0`, `X`, `k`, the density,
+/// Omega and the IAD matrices with volumes `X / k`.
+fn refresh(s: &mut Setup) {
+    let p = &mut s.p;
+    let np = p.len();
+    let tree = Octree::build(&s.keys, &p.x, &p.y, &p.z, 16).unwrap();
     let search = NeighborSearch {
         symmetric: true,
         ..Default::default()
     };
     search
-        .find_compact(&tree, &bbox, &p.x, &p.y, &p.z, &p.h, 0..np, &mut list)
+        .find_compact(&tree, &s.bbox, &p.x, &p.y, &p.z, &p.h, 0..np, &mut s.list)
         .unwrap();
     let k = kernel();
     let pos = Positions {
@@ -95,26 +114,16 @@ fn lattice_waved(n: usize, jitter: f64, wave: f64, periodic: bool, seed: u64) ->
         h: &p.h,
         m: &p.m,
     };
-    let mut rho0 = vec![0.0; np];
-    density(&k, &bbox, pos, &list, &mut rho0, &mut []);
-    let mut xm = vec![0.0; np];
-    xmass(&k, &bbox, pos, &list, &mut xm);
-    let mut kx = vec![0.0; np];
+    let (bbox, list) = (&s.bbox, &s.list);
+    density(&k, bbox, pos, list, &mut s.rho0, &mut []);
+    xmass(&k, bbox, pos, list, &mut s.xm);
     let out = VeOut {
-        kx: &mut kx,
+        kx: &mut s.kx,
         rho: &mut p.rho,
         omega: &mut p.omega,
     };
-    ve_density(&k, &bbox, pos, &xm, &list, out);
-    iad_volumes(&k, &bbox, pos, [&xm, &kx], &list, &mut p.iad).unwrap();
-    Setup {
-        p,
-        bbox,
-        list,
-        rho0,
-        xm,
-        kx,
-    }
+    ve_density(&k, bbox, pos, &s.xm, list, out);
+    iad_volumes(&k, bbox, pos, [&s.xm, &s.kx], list, &mut p.iad).unwrap();
 }
 
 #[test]
@@ -188,27 +197,11 @@ fn volume_elements_are_a_partition_of_unity_on_a_perturbed_lattice() {
     }
 }
 
-/// Pressure `P = P0 + g . x` and velocity `v = e x` (expanding: no
-/// viscosity) on a lattice in an open box, smoothly perturbed by `wave`; the rates of the particles at
-/// least 4.2 h inside the box against `-grad P / rho` and
-/// `-(P / rho) div v`, as the largest relative errors.
-fn linear_field_errors(wave: f64, grad_h: bool) -> (f64, f64) {
-    let mut s = lattice_waved(22, 0.0, wave, false, 3);
-    let g = [0.3, -0.2, 0.5];
-    let (p0, e) = (2.0, 0.01);
-    let gamma = 5.0 / 3.0;
-    let n = s.p.len();
-    let pressure = |x: [f64; 3]| p0 + g[0] * x[0] + g[1] * x[1] + g[2] * x[2];
-    for i in 0..n {
-        let x = [s.p.x[i], s.p.y[i], s.p.z[i]];
-        s.p.u[i] = pressure(x) / ((gamma - 1.0) * s.p.rho[i]);
-        (s.p.vx[i], s.p.vy[i], s.p.vz[i]) = (e * x[0], e * x[1], e * x[2]);
-    }
-    if !grad_h {
-        s.p.omega.clear();
-    }
+/// Pressure and sound speed from `u` (ideal gas, gamma = 5/3), then the
+/// volume-element momentum and energy rates with SPH-EXA's viscosity form.
+fn forces(s: &mut Setup, alpha: Alpha<'_>) {
     let p = &mut s.p;
-    Eos::IdealGas { gamma }.apply(&p.rho, &p.u, None, &mut p.p, &mut p.c);
+    Eos::IdealGas { gamma: 5.0 / 3.0 }.apply(&p.rho, &p.u, None, &mut p.p, &mut p.c);
     let state = HydroState {
         pos: Positions {
             x: &p.x,
@@ -230,7 +223,7 @@ fn linear_field_errors(wave: f64, grad_h: bool) -> (f64, f64) {
     f.fill_with(&state, Some(&s.kx));
     let scheme = MomentumScheme {
         gradients: Gradients::Iad,
-        alpha: Alpha::Constant(1.0),
+        alpha,
         av_form: AvForm::SphExa,
         xm: Some(&s.xm),
     };
@@ -241,6 +234,29 @@ fn linear_field_errors(wave: f64, grad_h: bool) -> (f64, f64) {
         du: &mut p.du,
     };
     momentum_energy_with(&kernel(), &s.bbox, state, &f, scheme, &s.list, rates);
+}
+
+/// Pressure `P = P0 + g . x` and velocity `v = e x` (expanding: no
+/// viscosity) on a lattice in an open box, smoothly perturbed by `wave`; the rates of the particles at
+/// least 4.2 h inside the box against `-grad P / rho` and
+/// `-(P / rho) div v`, as the largest relative errors.
+fn linear_field_errors(wave: f64, grad_h: bool) -> (f64, f64) {
+    let mut s = lattice_waved(22, 0.0, wave, false, 3);
+    let g = [0.3, -0.2, 0.5];
+    let (p0, e) = (2.0, 0.01);
+    let gamma: f64 = 5.0 / 3.0;
+    let n = s.p.len();
+    let pressure = |x: [f64; 3]| p0 + g[0] * x[0] + g[1] * x[1] + g[2] * x[2];
+    for i in 0..n {
+        let x = [s.p.x[i], s.p.y[i], s.p.z[i]];
+        s.p.u[i] = pressure(x) / ((gamma - 1.0) * s.p.rho[i]);
+        (s.p.vx[i], s.p.vy[i], s.p.vz[i]) = (e * x[0], e * x[1], e * x[2]);
+    }
+    if !grad_h {
+        s.p.omega.clear();
+    }
+    forces(&mut s, Alpha::Constant(1.0));
+    let p = &s.p;
     let (mut err_a, mut err_u) = (0.0f64, 0.0f64);
     for i in 0..n {
         let x = [p.x[i], p.y[i], p.z[i]];
@@ -282,4 +298,55 @@ fn linear_pressure_field_gives_minus_grad_p_over_rho() {
         a < 0.1 && u < 0.1,
         "perturbed lattice: force {a:e}, work {u:e}"
     );
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(10))]
+
+    /// With volume elements, Atwood-blended weights (a +-30% jittered
+    /// lattice puts pairs on the ramp), per-particle alpha and h varying
+    /// by +-25%: one force evaluation changes the total momentum by
+    /// round-off only, and the pressure + viscous work balances the
+    /// kinetic energy change.
+    #[test]
+    fn ve_forces_conserve_momentum_and_energy(seed in any::<u64>()) {
+        let mut s = lattice(10, 0.6, true, seed);
+        let mut rng = Rng(seed ^ 0x5EED);
+        let mut alpha = vec![0.0; s.p.len()];
+        for (i, a) in alpha.iter_mut().enumerate() {
+            s.p.vx[i] = rng.uniform() - 0.5;
+            s.p.vy[i] = rng.uniform() - 0.5;
+            s.p.vz[i] = rng.uniform() - 0.5;
+            s.p.u[i] = 1.0 + rng.uniform();
+            s.p.h[i] *= 1.0 + 0.5 * (rng.uniform() - 0.5);
+            *a = 0.05 + 0.95 * rng.uniform();
+        }
+        refresh(&mut s);
+        forces(&mut s, Alpha::PerParticle(&alpha));
+        let p = &s.p;
+        let mut mom = [0.0; 3];
+        let (mut scale, mut de, mut de_scale) = (0.0, 0.0, 0.0);
+        for i in 0..p.len() {
+            let a = [p.ax[i], p.ay[i], p.az[i]];
+            for k in 0..3 {
+                mom[k] += p.m[i] * a[k];
+                scale += p.m[i] * a[k].abs();
+            }
+            let work = p.m[i] * (p.vx[i] * a[0] + p.vy[i] * a[1] + p.vz[i] * a[2]);
+            de += work + p.m[i] * p.du[i];
+            de_scale += work.abs() + (p.m[i] * p.du[i]).abs();
+        }
+        for k in 0..3 {
+            prop_assert!(mom[k].abs() < 1e-13 * scale, "momentum {:e} vs {:e}", mom[k], scale);
+        }
+        prop_assert!(de.abs() < 1e-12 * de_scale, "energy rate {:e} vs {:e}", de, de_scale);
+        // Some pairs lie on the Atwood ramp.
+        let on_ramp = s.list.targets().any(|i| {
+            s.list.neighbors(i).any(|j| {
+                let at = (p.rho[i] - p.rho[j]).abs() / (p.rho[i] + p.rho[j]);
+                (0.1..=0.2).contains(&at)
+            })
+        });
+        prop_assert!(on_ramp);
+    }
 }
