@@ -606,11 +606,12 @@ fn atwood_weights(rho_i: F64s, rho_j: f64, xi: F64s, xj: f64) -> (F64s, F64s) {
     let xj_l = F64s::splat(xj);
     let cross = xi * xj_l;
     let low = at.lt(F64s::splat(ATWOOD_MIN));
+    let high = at.gt(F64s::splat(ATWOOD_MAX));
     let mut a = low.select(xi * xi, cross);
     let mut b = low.select(xj_l * xj_l, cross);
-    let at_l = at.to_array();
-    if at_l.iter().any(|&v| (ATWOOD_MIN..=ATWOOD_MAX).contains(&v)) {
+    if !(low | high).all() {
         // The ramp, lane by lane (rare: interfaces).
+        let at_l = at.to_array();
         let (xi_l, mut al, mut bl) = (xi.to_array(), a.to_array(), b.to_array());
         let ramp = 1.0 / (ATWOOD_MAX - ATWOOD_MIN);
         for l in 0..LANES {
