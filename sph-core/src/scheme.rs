@@ -134,7 +134,7 @@ pub const PRESETS: [(&str, Scheme, &str); 6] = [
     (
         "ve-ac",
         Scheme::VE_AC,
-        "`ve` without grad-h, with artificial conductivity alpha_u = 1: lower Sedov L1 rho, P and |v| than SPH-EXA's `ve` at 30^3 and 40^3",
+        "`ve` without grad-h, with artificial conductivity alpha_u = 1: lower Sedov L1 rho, P and |v| than SPH-EXA's `ve` at 30^3, 40^3 and 50^3",
     ),
     (
         "noh",
@@ -186,7 +186,8 @@ impl Scheme {
     /// [`Scheme::VE`] without the grad-h terms and with the artificial
     /// conductivity `alpha_u = 1` (Price 2008's value, not tuned): on
     /// Sedov (t = 0.05) its L1 of rho, P and |v| are below those of
-    /// SPH-EXA's `ve` at 30^3 and at 40^3.
+    /// SPH-EXA's `ve` at 30^3, 40^3 and 50^3. On Noh and Evrard it is
+    /// closer to the references than `ve` but still far (README).
     pub const VE_AC: Scheme = Scheme {
         grad_h: false,
         conductivity: Some(1.0),
