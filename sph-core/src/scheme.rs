@@ -173,6 +173,16 @@ impl Scheme {
     /// viscosity switches (alpha in [0.05, 1],
     /// [`SwitchForm::SphExa`](crate::av_switch::SwitchForm::SphExa)) and its viscosity and
     /// time-step forms ([`AvForm::SphExa`]).
+    ///
+    /// Where it departs from SPH-EXA's code, for conservation or
+    /// exactness: pair sums run over symmetric lists (`r < 2 max(h_i, h_j)`;
+    /// SPH-EXA sums `r < 2 h_i` only, so its pair forces are not always
+    /// antisymmetric); the viscous heating sum is not clamped at zero
+    /// (SPH-EXA clamps it, which can add energy); the velocity divergence
+    /// of the switches uses `X_j / k_j` (SPH-EXA: `X_j / k_i`), exact for
+    /// linear fields. On Sedov t = 0.05 its L1 errors of rho, P and |v| are
+    /// at most 1.3% above and up to 2.9% below SPH-EXA's `ve` at 30^3,
+    /// 40^3 and 50^3 (README).
     pub const VE: Scheme = Scheme {
         gradients: Gradients::Iad,
         grad_h: true,
