@@ -26,6 +26,9 @@
 //! number of threads.
 //!
 //! # Differences from SPH-EXA
+//! [`SwitchForm::SphExa`] (the `ve` preset) follows SPH-EXA's relaxation
+//! and decay signal velocity as written; the default
+//! [`SwitchForm::Smooth`] differs in the first two points below.
 //! - SPH-EXA integrates `d alpha / dt = (target - alpha) / tau` with one
 //!   explicit Euler step; here the exact solution over `dt` for a frozen
 //!   target is used, `alpha <- target + (alpha - target) exp(-dt / tau)`,
@@ -37,6 +40,8 @@
 //! - Volumes are `m_j / rho_j`, the ones the IAD matrices of
 //!   [`iad`](crate::iad::iad) are built with, so the IAD divergence of a
 //!   linear field is exact (SPH-EXA divides by its grad-h factor as well).
+//!   With generalised volume elements `m_j / rho_j = X_j / k_j`; SPH-EXA's
+//!   `ve` divergence uses `X_j / k_i`, exact only where `k` is uniform.
 //!
 //! # Example
 //! ```
@@ -120,6 +125,26 @@ pub struct AvSwitchParams {
     /// (0.05): compression slower than this fraction of `c` per `h` does
     /// not switch the viscosity on.
     pub sound_weight: f64,
+    /// How `alpha` relaxes and which signal velocity sets the decay time.
+    #[serde(default)]
+    pub form: SwitchForm,
+}
+
+/// How the switch relaxes `alpha` towards its target.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SwitchForm {
+    /// Exact exponential decay over `dt` for a frozen target, clamped to
+    /// `[alpha_min, alpha_max]`; the decay signal velocity counts every
+    /// neighbour, `v_sig,i = max(c_i, max_j (c_i + c_j - 3 min(w_ij, 0)))`.
+    #[default]
+    Smooth,
+    /// SPH-EXA's `hydro_ve` switch as written: one explicit Euler step
+    /// `alpha += (max(alpha_loc, alpha_min) - alpha) / tau * dt` (no
+    /// clamp), and a decay signal velocity over approaching pairs only,
+    /// `v_sig,i = max(1e-40 c_i, max_{j: w_ij < 0} (c_i + c_j - 3 w_ij))`
+    /// (so `alpha` stays put where nothing approaches).
+    SphExa,
 }
 
 impl Default for AvSwitchParams {
@@ -135,6 +160,14 @@ impl AvSwitchParams {
         alpha_max: 1.0,
         decay: 0.2,
         sound_weight: 0.05,
+        form: SwitchForm::Smooth,
+    };
+
+    /// SPH-EXA's `hydro_ve` switch: its parameters and
+    /// [`SwitchForm::SphExa`].
+    pub const SPHEXA: AvSwitchParams = AvSwitchParams {
+        form: SwitchForm::SphExa,
+        ..Self::DEFAULT
     };
 
     /// Whether `0 <= alpha_min <= alpha_max`, `decay > 0` and
@@ -193,8 +226,23 @@ impl AvSwitchParams {
     /// let a = p.advance(1.0, 0.0, 2.0, 2.0);
     /// assert!((a - (0.05 + 0.95 * (-1.0f64).exp())).abs() < 1e-15);
     /// ```
+    ///
+    /// With [`SwitchForm::SphExa`]: the jump up as above, else one Euler
+    /// step `alpha + (max(alpha_loc, alpha_min) - alpha) dt / tau`,
+    /// unclamped.
     #[inline]
     pub fn advance(&self, alpha: f64, alpha_loc: f64, tau: f64, dt: f64) -> f64 {
+        if self.form == SwitchForm::SphExa {
+            if alpha_loc >= alpha {
+                return alpha_loc;
+            }
+            let target = if alpha_loc >= self.alpha_min {
+                alpha_loc
+            } else {
+                self.alpha_min
+            };
+            return alpha + (target - alpha) / tau * dt;
+        }
         let next = if alpha_loc >= alpha {
             alpha_loc
         } else {
@@ -202,6 +250,31 @@ impl AvSwitchParams {
             target + (alpha - target) * (-dt / tau).exp()
         };
         next.clamp(self.alpha_min, self.alpha_max)
+    }
+}
+
+/// The Balsara (1995) shear limiter of particle `i`:
+///
+/// ```text
+/// f_i = |div v_i| / (|div v_i| + |curl v_i| + 1e-4 c_i / h_i)
+/// ```
+///
+/// near 1 in compression (or expansion) without vorticity, near 0 in
+/// shear; 0 when the flow and the sound speed vanish.
+///
+/// ```
+/// use sph_core::av_switch::balsara;
+/// assert!(balsara(-3.0, 0.0, 1.0, 0.1) > 0.999);
+/// assert!(balsara(0.0, 1.0, 1.0, 0.1) == 0.0);
+/// ```
+#[inline]
+pub fn balsara(div_v: f64, curl_v: f64, c: f64, h: f64) -> f64 {
+    let d = div_v.abs();
+    let denom = d + curl_v.abs() + 1e-4 * c / h;
+    if denom > 0.0 {
+        d / denom
+    } else {
+        0.0
     }
 }
 
@@ -416,7 +489,11 @@ impl<K: Kernel, const IAD: bool> Indicator<'_, K, IAD> {
             inv_h: 1.0 / hi,
             reach_i,
             s: [F64s::splat(0.0); 3],
-            v_sig: ci,
+            v_sig: if self.params.form == SwitchForm::SphExa {
+                1e-40 * ci
+            } else {
+                ci
+            },
         }
     }
 
@@ -435,8 +512,14 @@ impl<K: Kernel, const IAD: bool> Indicator<'_, K, IAD> {
         let vi = t.vi;
         let vij = [vi[0] - f.v[0][j], vi[1] - f.v[1][j], vi[2] - f.v[2][j]];
         let w_ij = (vij[0] * d[0] + vij[1] * d[1] + vij[2] * d[2]) / r;
-        let vs = t.ci + f.c[j] - 3.0 * w_ij.min(zero);
-        t.v_sig = t.v_sig.max(vs * pair);
+        if self.params.form == SwitchForm::SphExa {
+            // Approaching pairs only.
+            let vs = w_ij.where_negative(t.ci + f.c[j] - 3.0 * w_ij);
+            t.v_sig = t.v_sig.max(vs * pair);
+        } else {
+            let vs = t.ci + f.c[j] - 3.0 * w_ij.min(zero);
+            t.v_sig = t.v_sig.max(vs * pair);
+        }
         let w = f.m[j] / f.rho[j]
             * pair_weight::<K, IAD>(f.kernel, r, t.inv_h)
             * (self.div_v[j] - t.div_i)

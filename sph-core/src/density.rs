@@ -89,3 +89,132 @@ impl<K: Kernel> PairStage for Density<'_, K> {
         }
     }
 }
+
+/// The generalised volume elements of SPH-EXA's "ve" scheme, first pass:
+/// `X_i = m_i / rho0_i` for every target of `nl`, with the standard
+/// density `rho0_i = sum_j m_j W(r_ij, h_i)` (self included). The halos'
+/// `X` must be exchanged before [`ve_density`].
+///
+/// # Panics
+/// If the position arrays differ in length or do not cover the lists.
+pub fn xmass<K: Kernel>(
+    kernel: &K,
+    bbox: &BoundingBox,
+    pos: Positions<'_>,
+    nl: &CompactNeighborList,
+    xm: &mut [f64],
+) {
+    density(kernel, bbox, pos, nl, xm, &mut []);
+    for i in nl.targets() {
+        xm[i] = pos.m[i] / xm[i];
+    }
+}
+
+/// Where [`ve_density`] writes (slices over all particles; the targets'
+/// entries are written).
+#[derive(Debug)]
+pub struct VeOut<'a> {
+    /// The normalisation `k_i`.
+    pub kx: &'a mut [f64],
+    /// The density `rho_i = k_i m_i / X_i`.
+    pub rho: &'a mut [f64],
+    /// The grad-h factor (empty: not computed).
+    pub omega: &'a mut [f64],
+}
+
+/// The generalised volume elements, second pass, for every target of
+/// `nl` (`xm` from [`xmass`], halos included):
+///
+/// ```text
+/// k_i     = sum_j X_j W(r_ij, h_i)                       (self included)
+/// rho_i   = k_i m_i / X_i
+/// Omega_i = 1 + h_i / (3 rho_i) [ (m_i / X_i) sum_j X_j dW/dh(r_ij, h_i)
+///                                 + (k_i - X_i W(0, h_i)) sum_j m_j dW/dh(r_ij, h_i) ]
+/// ```
+///
+/// The bracket is SPH-EXA's `d rho_i / dh_i` (`ve_def_gradh`): the
+/// derivative of `k_i m_i / X_i` with `d X_i / dh` entering through the
+/// neighbours' part of `k_i` only. The volumes `V_j = X_j / k_j` make
+/// `sum_j V_j W_ij` a partition of unity to the accuracy of the kernel
+/// sums; the IAD matrices are built with them
+/// ([`iad_volumes`](crate::iad::iad_volumes)).
+///
+/// # Panics
+/// If the arrays differ in length or do not cover the lists.
+pub fn ve_density<K: Kernel>(
+    kernel: &K,
+    bbox: &BoundingBox,
+    pos: Positions<'_>,
+    xm: &[f64],
+    nl: &CompactNeighborList,
+    out: VeOut<'_>,
+) {
+    let driver = PairLoop::new(bbox, kernel.support(), [pos.x, pos.y, pos.z], pos.h, nl)
+        .expect("ve density: positions");
+    let n = pos.x.len();
+    let targets = nl.targets();
+    let omega = (!out.omega.is_empty()).then(|| [&mut out.omega[targets.clone()]]);
+    let stage = VeDensity {
+        kernel,
+        norm: kernel.norm(),
+        w0: kernel.shape(0.0),
+        h: pos.h,
+        m: &pos.m[..n],
+        xm: &xm[..n],
+    };
+    driver.run(
+        &stage,
+        ([&mut out.kx[targets.clone()], &mut out.rho[targets]], omega),
+    );
+}
+
+/// The sums of the volume-element normalisation and its h-derivative.
+struct VeDensity<'a, K> {
+    kernel: &'a K,
+    norm: f64,
+    /// The kernel shape at 0 (1 for the sinc family).
+    w0: f64,
+    h: &'a [f64],
+    m: &'a [f64],
+    xm: &'a [f64],
+}
+
+impl<K: Kernel> PairStage for VeDensity<'_, K> {
+    /// `1/h`, `sum X w`, `sum X (3 w + v w')`, `sum m (3 w + v w')`.
+    type Sums = (F64s, F64s, F64s, F64s);
+    type Out<'o> = ([&'o mut [f64]; 2], Option<[&'o mut [f64]; 1]>);
+    type Stats = ();
+
+    #[inline(always)]
+    fn start(&self, g: &Group) -> Self::Sums {
+        let zero = F64s::splat(0.0);
+        (1.0 / g.load(self.h), zero, zero, zero)
+    }
+
+    #[inline(always)]
+    fn pair(&self, (inv_h, sk, sx, sm): &mut Self::Sums, j: usize, _: [F64s; 3], r2: F64s) {
+        let v = r2.sqrt() * *inv_h;
+        let (w, dw) = self.kernel.shape_and_derivative_lanes(v);
+        let dh = 3.0 * w + v * dw;
+        *sk += self.xm[j] * w;
+        *sx += self.xm[j] * dh;
+        *sm += self.m[j] * dh;
+    }
+
+    #[inline(always)]
+    fn finish(&self, g: &Group, (inv_h, sk, sx, sm): Self::Sums, out: Self::Out<'_>) {
+        let h3 = self.norm * inv_h * inv_h * inv_h;
+        let (xi, mi) = (g.load(self.xm), g.load(self.m));
+        let kx = h3 * sk;
+        let rho = kx * mi / xi;
+        let ([k_out, rho_out], omega) = out;
+        kx.store(k_out);
+        rho.store(rho_out);
+        if let Some([o]) = omega {
+            // dW/dh = -K/h^4 (3 w + v w'); the self term of k is K w(0) X_i / h^3.
+            let h4 = h3 * inv_h;
+            let drho_dh = -(h4 * sx) * mi / xi - (kx - h3 * self.w0 * xi) * (h4 * sm);
+            (1.0 + drho_dh / (3.0 * rho * inv_h)).store(o);
+        }
+    }
+}

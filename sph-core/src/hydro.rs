@@ -1,19 +1,19 @@
 //! One SPH-EXA time step on one node: sort, tree, neighbours, density,
 //! EOS, IAD, momentum and energy, time step, integration.
 
-use crate::av_switch::{update_alpha, velocity_divergence, AvSwitchParams, FlowState};
+use crate::av_switch::{balsara, update_alpha, velocity_divergence, FlowState};
 use crate::conduction::conduction;
 use crate::conserved::Conserved;
-use crate::density::{density, Positions};
+use crate::density::{density, ve_density, xmass, Positions, VeOut};
 use crate::eos::Eos;
-use crate::iad::iad;
+use crate::iad::iad_volumes;
 use crate::integrate::{integrate, HUpdate};
 use crate::momentum::{
-    momentum_energy, momentum_energy_switched, Gradients, HydroState, MomentumStats, PairFactors,
+    momentum_energy_with, Alpha, Gradients, HydroState, MomentumScheme, MomentumStats, PairFactors,
     Rates,
 };
 use crate::neighbors::{find_neighbors, NeighborParams};
-use crate::scheme::{Scheme, Viscosity};
+use crate::scheme::{Scheme, Viscosity, Volume};
 use crate::timestep::{DtLimit, TimestepParams};
 use crate::{CoreError, FieldSet, Particles};
 use rayon::prelude::*;
@@ -337,6 +337,14 @@ pub struct Hydro<K: Kernel, C: Communicator = SerialComm> {
     factors: PairFactors,
     h_before: Vec<f64>,
     div_v: Vec<f64>,
+    /// `|curl v|` (Balsara limiter only).
+    curl_v: Vec<f64>,
+    /// Viscosity strengths with the Balsara factor (limiter only).
+    alpha_eff: Vec<f64>,
+    /// Volume elements `X` and their normalisation `k` (generalised
+    /// volumes only).
+    xm: Vec<f64>,
+    kx: Vec<f64>,
     next_h_max: Option<f64>,
     gravity: Option<DistributedGravity>,
     gravity_tree: Octree,
@@ -396,6 +404,10 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             factors: PairFactors::default(),
             h_before: Vec::new(),
             div_v: Vec::new(),
+            curl_v: Vec::new(),
+            alpha_eff: Vec::new(),
+            xm: Vec::new(),
+            kx: Vec::new(),
             next_h_max: None,
             gravity: config
                 .gravity
@@ -490,7 +502,13 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         self.list.bytes()
             + self.factors.bytes()
             + self.domain.keys().len() * 8 * 3
-            + self.h_before.capacity() * 8
+            + (self.h_before.capacity()
+                + self.div_v.capacity()
+                + self.curl_v.capacity()
+                + self.alpha_eff.capacity()
+                + self.xm.capacity()
+                + self.kx.capacity())
+                * 8
             + self.tree.num_nodes() * 90
     }
 
@@ -517,7 +535,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         clock.lap(Stage::Tree);
         let neighbours = self.search(p, bbox, step, owned.clone())?;
         clock.lap(Stage::Neighbors);
-        self.density(p, bbox);
+        self.density(p, bbox)?;
         clock.lap(Stage::Density);
         self.eos(p, owned.clone())?;
         clock.lap(Stage::Eos);
@@ -531,9 +549,11 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 .exchange(&mut [c0, c1, c2, c3, c4, c5].map(|c| c.as_mut_slice()))?;
             clock.lap(Stage::Halos);
         }
-        self.factors.fill(&hydro_state!(p));
-        if let Some(sw) = self.config.scheme.switches() {
-            self.switches(p, bbox, &sw, step, &mut clock)?;
+        let ve = self.config.scheme.volume == Volume::Generalised;
+        self.factors
+            .fill_with(&hydro_state!(p), ve.then_some(self.kx.as_slice()));
+        if self.config.scheme.needs_divergence() {
+            self.switches(p, bbox, step, &mut clock)?;
         }
         let forces = self.momentum(p, bbox);
         clock.lap(Stage::Momentum);
@@ -662,10 +682,15 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         })
     }
 
-    /// The IAD matrices of the owned particles.
+    /// The IAD matrices of the owned particles, with volumes `m / rho` or
+    /// the volume elements `X / k`.
     fn iad(&self, p: &mut Particles, bbox: &BoundingBox, step: u64) -> Result<(), CoreError> {
         let pos = positions!(p);
-        iad(&self.kernel, bbox, pos, &p.rho, &self.list, &mut p.iad).map_err(|s| {
+        let volumes = match self.config.scheme.volume {
+            Volume::Mass => [&p.m[..], &p.rho[..]],
+            Volume::Generalised => [&self.xm[..], &self.kx[..]],
+        };
+        iad_volumes(&self.kernel, bbox, pos, volumes, &self.list, &mut p.iad).map_err(|s| {
             CoreError::SingularIad {
                 step,
                 id: p.id[s.index],
@@ -675,46 +700,75 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         })
     }
 
-    /// The viscosity switches: velocity divergence, exchanged to the halos,
-    /// then alpha advanced over the time since its last update (none before
-    /// step 1), exchanged too (the momentum stage reads the halos' alpha).
+    /// The viscosity switches and the Balsara limiter: velocity divergence
+    /// (and curl, for the limiter), exchanged to the halos when the
+    /// switches need it, then alpha advanced over the time since its last
+    /// update (none before step 1); the strengths the momentum stage reads
+    /// (`alpha`, or `alpha_eff` with the limiter) are exchanged too.
     fn switches(
         &mut self,
         p: &mut Particles,
         bbox: &BoundingBox,
-        sw: &AvSwitchParams,
         step: u64,
         clock: &mut StageClock,
     ) -> Result<(), CoreError> {
-        self.div_v.resize(p.len(), 0.0);
+        let scheme = self.config.scheme;
+        let n = p.len();
+        self.div_v.resize(n, 0.0);
+        if scheme.balsara {
+            self.curl_v.resize(n, 0.0);
+        }
         let flow = FlowState::from(hydro_state!(p));
-        let g = self.config.scheme.gradients;
+        let g = scheme.gradients;
         let (kernel, list) = (&self.kernel, &self.list);
-        velocity_divergence(kernel, bbox, flow, g, list, &mut self.div_v, &mut []);
-        clock.lap(Stage::Switches);
-        self.domain.exchange(&mut [self.div_v.as_mut_slice()])?;
-        clock.lap(Stage::Halos);
-        let elapsed = if step == 1 { 0.0 } else { self.dt_prev };
-        let flow = FlowState::from(hydro_state!(p));
-        update_alpha(
+        velocity_divergence(
             kernel,
             bbox,
             flow,
             g,
-            &self.div_v,
-            sw,
-            elapsed,
             list,
-            &mut p.alpha,
+            &mut self.div_v,
+            &mut self.curl_v,
         );
         clock.lap(Stage::Switches);
-        self.domain.exchange(&mut [p.alpha.as_mut_slice()])?;
+        if let Some(sw) = scheme.switches() {
+            self.domain.exchange(&mut [self.div_v.as_mut_slice()])?;
+            clock.lap(Stage::Halos);
+            let elapsed = if step == 1 { 0.0 } else { self.dt_prev };
+            let flow = FlowState::from(hydro_state!(p));
+            update_alpha(
+                kernel,
+                bbox,
+                flow,
+                g,
+                &self.div_v,
+                &sw,
+                elapsed,
+                list,
+                &mut p.alpha,
+            );
+            clock.lap(Stage::Switches);
+        }
+        if scheme.balsara {
+            self.alpha_eff.resize(n, 0.0);
+            let constant = scheme.alpha();
+            let switched = scheme.switches().is_some();
+            for i in list.targets() {
+                let base = if switched { p.alpha[i] } else { constant };
+                let f = balsara(self.div_v[i], self.curl_v[i], p.c[i], p.h[i]);
+                self.alpha_eff[i] = base * f;
+            }
+            clock.lap(Stage::Switches);
+            self.domain.exchange(&mut [self.alpha_eff.as_mut_slice()])?;
+        } else {
+            self.domain.exchange(&mut [p.alpha.as_mut_slice()])?;
+        }
         clock.lap(Stage::Halos);
         Ok(())
     }
 
     /// Accelerations and du/dt of the owned particles, with the scheme's
-    /// viscosity.
+    /// viscosity and volumes.
     fn momentum(&self, p: &mut Particles, bbox: &BoundingBox) -> MomentumStats {
         let state = hydro_state!(p);
         let rates = Rates {
@@ -723,20 +777,23 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             az: &mut p.az,
             du: &mut p.du,
         };
-        let (k, f, g, list) = (
-            &self.kernel,
-            &self.factors,
-            self.config.scheme.gradients,
-            &self.list,
-        );
-        match self.config.scheme.viscosity {
-            Viscosity::Constant { alpha } => {
-                momentum_energy(k, bbox, state, f, g, alpha, list, rates)
+        let s = self.config.scheme;
+        let alpha = if s.balsara {
+            Alpha::PerParticle(&self.alpha_eff)
+        } else {
+            match s.viscosity {
+                Viscosity::Constant { alpha } => Alpha::Constant(alpha),
+                Viscosity::Switched(_) => Alpha::PerParticle(&p.alpha),
             }
-            Viscosity::Switched(_) => {
-                momentum_energy_switched(k, bbox, state, f, g, &p.alpha, list, rates)
-            }
-        }
+        };
+        let scheme = MomentumScheme {
+            gradients: s.gradients,
+            alpha,
+            av_form: s.av_form,
+            xm: (s.volume == Volume::Generalised).then_some(self.xm.as_slice()),
+        };
+        let (k, f, list) = (&self.kernel, &self.factors, &self.list);
+        momentum_energy_with(k, bbox, state, f, scheme, list, rates)
     }
 
     /// Adds self-gravity to the owned particles' accelerations (when the
@@ -861,7 +918,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         self.tree
             .rebuild(self.domain.keys(), &p.x, &p.y, &p.z, self.config.bucket)?;
         self.search(p, bbox, self.step, owned.clone())?;
-        self.density(p, bbox);
+        self.density(p, bbox)?;
         self.eos(p, owned.clone())?;
         self.exchange_thermo(p)?;
         if self.gravity.is_some() {
@@ -919,17 +976,34 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         Ok(stats)
     }
 
-    /// Density and grad-h factor of the owned particles.
-    fn density(&self, p: &mut Particles, bbox: &BoundingBox) {
+    /// Density and grad-h factor of the owned particles; with generalised
+    /// volumes, `X` (exchanged to the halos), then `k`, the density
+    /// `k m / X` and the grad-h factor.
+    fn density(&mut self, p: &mut Particles, bbox: &BoundingBox) -> Result<(), CoreError> {
         let pos = positions!(p);
-        density(
-            &self.kernel,
-            bbox,
-            pos,
-            &self.list,
-            &mut p.rho,
-            &mut p.omega,
-        );
+        if self.config.scheme.volume == Volume::Mass {
+            density(
+                &self.kernel,
+                bbox,
+                pos,
+                &self.list,
+                &mut p.rho,
+                &mut p.omega,
+            );
+            return Ok(());
+        }
+        let n = p.len();
+        self.xm.resize(n, 0.0);
+        self.kx.resize(n, 0.0);
+        xmass(&self.kernel, bbox, pos, &self.list, &mut self.xm);
+        self.domain.exchange(&mut [self.xm.as_mut_slice()])?;
+        let out = VeOut {
+            kx: &mut self.kx,
+            rho: &mut p.rho,
+            omega: &mut p.omega,
+        };
+        ve_density(&self.kernel, bbox, positions!(p), &self.xm, &self.list, out);
+        Ok(())
     }
 
     /// Sends the owners' density, pressure, sound speed (and Omega) to the
@@ -938,6 +1012,9 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         let mut fields: Vec<&mut [f64]> = vec![&mut p.rho, &mut p.p, &mut p.c];
         if !p.omega.is_empty() {
             fields.push(&mut p.omega);
+        }
+        if self.config.scheme.volume == Volume::Generalised {
+            fields.push(&mut self.kx);
         }
         self.domain.exchange(&mut fields)?;
         Ok(())

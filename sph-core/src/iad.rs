@@ -59,6 +59,26 @@ pub fn iad<K: Kernel>(
     nl: &CompactNeighborList,
     c: &mut [Vec<f64>; 6],
 ) -> Result<(), Singular> {
+    iad_volumes(kernel, bbox, pos, [pos.m, rho], nl, c)
+}
+
+/// As [`iad`] with volumes `V_j = num_j / den_j` given as the pair
+/// `[num, den]`: `[m, rho]` is [`iad`]; the generalised volume elements
+/// pass `[X, k]` ([`ve_density`](crate::density::ve_density)).
+///
+/// # Errors
+/// The lowest-index singular matrix, as [`iad`].
+///
+/// # Panics
+/// If the arrays differ in length or do not cover the lists.
+pub fn iad_volumes<K: Kernel>(
+    kernel: &K,
+    bbox: &BoundingBox,
+    pos: Positions<'_>,
+    [num, den]: [&[f64]; 2],
+    nl: &CompactNeighborList,
+    c: &mut [Vec<f64>; 6],
+) -> Result<(), Singular> {
     let driver = PairLoop::new(bbox, kernel.support(), [pos.x, pos.y, pos.z], pos.h, nl)
         .expect("iad: positions");
     let n = pos.x.len();
@@ -66,8 +86,8 @@ pub fn iad<K: Kernel>(
         kernel,
         norm: kernel.norm(),
         h: pos.h,
-        m: &pos.m[..n],
-        rho: &rho[..n],
+        m: &num[..n],
+        rho: &den[..n],
     };
     let r = nl.targets();
     let [c0, c1, c2, c3, c4, c5] = c;
@@ -100,7 +120,9 @@ struct Tau<'a, K> {
     kernel: &'a K,
     norm: f64,
     h: &'a [f64],
+    /// Volume numerators (`m` or `X`).
     m: &'a [f64],
+    /// Volume denominators (`rho` or `k`).
     rho: &'a [f64],
 }
 

@@ -67,7 +67,7 @@ mod particles;
 pub mod scheme;
 pub mod timestep;
 
-pub use av_switch::AvSwitchParams;
+pub use av_switch::{AvSwitchParams, SwitchForm};
 pub use conserved::Conserved;
 pub use eos::Eos;
 pub use error::CoreError;
@@ -76,5 +76,5 @@ pub use integrate::HUpdate;
 pub use neighbors::NeighborParams;
 pub use pair_loop::Gradients;
 pub use particles::{FieldSet, Particles};
-pub use scheme::{Scheme, Viscosity, PRESETS};
+pub use scheme::{AvForm, Scheme, Viscosity, Volume, PRESETS};
 pub use timestep::TimestepParams;

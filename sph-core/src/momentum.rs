@@ -27,8 +27,9 @@ use crate::density::Positions;
 pub use crate::pair_loop::Gradients;
 use crate::pair_loop::{
     neighbour_lanes, sym_mat_vec, with_gradients, F64s, Group, PairLoop, PairStage, Reduce,
-    WithGradients,
+    WithGradients, LANES,
 };
+pub use crate::scheme::AvForm;
 use rayon::prelude::*;
 use sph_kernels::Kernel;
 use sph_tree::{BoundingBox, CompactNeighborList};
@@ -91,6 +92,14 @@ pub struct PairFactors {
 impl PairFactors {
     /// Fills the factors of every particle of `s` (parallel).
     pub fn fill(&mut self, s: &HydroState<'_>) {
+        self.fill_with(s, None);
+    }
+
+    /// As [`fill`](Self::fill); with the generalised volume elements'
+    /// normalisation `kx` (every particle), the pressure factor is
+    /// SPH-EXA's `P_i / (k_i m_i^2 Omega_i)`, which the pair loop
+    /// multiplies by the Atwood-blended `X` weights.
+    pub fn fill_with(&mut self, s: &HydroState<'_>, kx: Option<&[f64]>) {
         let n = s.rho.len();
         for v in [&mut self.inv_h, &mut self.inv_rho, &mut self.pre] {
             // Grow to what the particles need, not to twice the old size.
@@ -108,7 +117,10 @@ impl PairFactors {
                 let om = if s.omega.is_empty() { 1.0 } else { s.omega[i] };
                 *ih = 1.0 / s.pos.h[i];
                 *ir = 1.0 / s.rho[i];
-                *pre = s.p[i] * *ir * *ir / om;
+                *pre = match kx {
+                    None => s.p[i] * *ir * *ir / om,
+                    Some(k) => s.p[i] / (k[i] * s.pos.m[i] * s.pos.m[i] * om),
+                };
             });
     }
 
@@ -134,16 +146,13 @@ pub fn momentum_energy<K: Kernel>(
     nl: &CompactNeighborList,
     out: Rates<'_>,
 ) -> MomentumStats {
-    let run = MomentumRun {
-        kernel,
-        bbox,
-        s,
-        f,
+    let scheme = MomentumScheme {
+        gradients,
         alpha: Alpha::Constant(alpha),
-        nl,
-        out,
+        av_form: AvForm::Paper,
+        xm: None,
     };
-    with_gradients(gradients, run)
+    momentum_energy_with(kernel, bbox, s, f, scheme, nl, out)
 }
 
 /// As [`momentum_energy`], with a viscosity strength per particle: pair
@@ -164,30 +173,95 @@ pub fn momentum_energy_switched<K: Kernel>(
     nl: &CompactNeighborList,
     out: Rates<'_>,
 ) -> MomentumStats {
-    assert!(
-        alpha.len() >= s.rho.len(),
-        "alpha has {} values for {} particles",
-        alpha.len(),
-        s.rho.len()
-    );
+    let scheme = MomentumScheme {
+        gradients,
+        alpha: Alpha::PerParticle(alpha),
+        av_form: AvForm::Paper,
+        xm: None,
+    };
+    momentum_energy_with(kernel, bbox, s, f, scheme, nl, out)
+}
+
+/// The viscosity strength of the pairs.
+#[derive(Debug, Clone, Copy)]
+pub enum Alpha<'a> {
+    /// One strength for every pair.
+    Constant(f64),
+    /// One per particle (targets and halos); pairs use the mean.
+    PerParticle(&'a [f64]),
+}
+
+/// The scheme elements of a momentum pass beyond the state: gradient
+/// operator, viscosity strength and form, and the volume elements.
+#[derive(Debug, Clone, Copy)]
+pub struct MomentumScheme<'a> {
+    /// Gradient operator.
+    pub gradients: Gradients,
+    /// Viscosity strength.
+    pub alpha: Alpha<'a>,
+    /// Viscosity and signal-velocity form.
+    pub av_form: AvForm,
+    /// The generalised volume elements `X` of every particle (with
+    /// [`PairFactors::fill_with`] given their `k`), or none (`m / rho`).
+    pub xm: Option<&'a [f64]>,
+}
+
+/// Accelerations and du/dt of every target of `nl` for any scheme
+/// ([`momentum_energy`] and [`momentum_energy_switched`] are the paper's
+/// forms). With volume elements, the pressure terms of pair `i, j` are
+///
+/// ```text
+/// - m_j [ a_ij P_i/(k_i m_i^2 Omega_i) A_ij(h_i) + b_ij P_j/(k_j m_j^2 Omega_j) A_ij(h_j) ]
+/// ```
+///
+/// with `(a_ij, b_ij) = (X_i^2, X_j^2)` for Atwood numbers
+/// `At = |rho_i - rho_j| / (rho_i + rho_j) < 0.1`, `(X_i X_j, X_i X_j)`
+/// above 0.2 and `(X_i^(2-s) X_j^s, X_j^(2-s) X_i^s)`, `s = (At - 0.1)/0.1`,
+/// between (SPH-EXA's `hydro_ve`); the energy equation takes `a_ij` in its
+/// pressure work, so the pair terms stay antisymmetric and the work
+/// balances the kinetic energy exactly. With `X = m / rho` and `k = 1`
+/// this is the paper's form.
+///
+/// # Panics
+/// If the state's arrays (or `alpha`, `xm`) do not cover the lists.
+pub fn momentum_energy_with<K: Kernel>(
+    kernel: &K,
+    bbox: &BoundingBox,
+    s: HydroState<'_>,
+    f: &PairFactors,
+    scheme: MomentumScheme<'_>,
+    nl: &CompactNeighborList,
+    out: Rates<'_>,
+) -> MomentumStats {
+    let n = s.rho.len();
+    if let Alpha::PerParticle(a) = scheme.alpha {
+        assert!(
+            a.len() >= n,
+            "alpha has {} values for {n} particles",
+            a.len()
+        );
+    }
+    if let Some(x) = scheme.xm {
+        assert!(x.len() >= n, "X has {} values for {n} particles", x.len());
+    }
     let run = MomentumRun {
         kernel,
         bbox,
         s,
         f,
-        alpha: Alpha::PerParticle(alpha),
+        alpha: scheme.alpha,
+        av_form: scheme.av_form,
+        xm: scheme.xm,
         nl,
         out,
     };
-    with_gradients(gradients, run)
+    with_gradients(scheme.gradients, run)
 }
 
-/// The viscosity strength of the pairs.
-#[derive(Debug, Clone, Copy)]
-enum Alpha<'a> {
-    Constant(f64),
-    PerParticle(&'a [f64]),
-}
+/// Atwood numbers below this keep the weights `X_i^2, X_j^2`.
+const ATWOOD_MIN: f64 = 0.1;
+/// Atwood numbers above this use the weights `X_i X_j`.
+const ATWOOD_MAX: f64 = 0.2;
 
 /// The arguments of one momentum pass, run for one gradient operator.
 struct MomentumRun<'a, K> {
@@ -196,6 +270,8 @@ struct MomentumRun<'a, K> {
     s: HydroState<'a>,
     f: &'a PairFactors,
     alpha: Alpha<'a>,
+    av_form: AvForm,
+    xm: Option<&'a [f64]>,
     nl: &'a CompactNeighborList,
     out: Rates<'a>,
 }
@@ -217,23 +293,46 @@ impl<K: Kernel> WithGradients for MomentumRun<'_, K> {
             &mut o.du[r],
         ];
         let flow = Flow::new(self.kernel, &flow_state, IAD);
+        let xm = self.xm.map_or(&[][..], |x| &x[..n]);
+        let sphexa = self.av_form == AvForm::SphExa;
+        macro_rules! go {
+            ($sw:literal, $a:expr, $per:expr) => {
+                match (self.xm.is_some(), sphexa) {
+                    (false, false) => driver.run(
+                        &momentum::<K, IAD, $sw, false, false>(flow, f, n, $a, $per, xm),
+                        out,
+                    ),
+                    (false, true) => driver.run(
+                        &momentum::<K, IAD, $sw, false, true>(flow, f, n, $a, $per, xm),
+                        out,
+                    ),
+                    (true, false) => driver.run(
+                        &momentum::<K, IAD, $sw, true, false>(flow, f, n, $a, $per, xm),
+                        out,
+                    ),
+                    (true, true) => driver.run(
+                        &momentum::<K, IAD, $sw, true, true>(flow, f, n, $a, $per, xm),
+                        out,
+                    ),
+                }
+            };
+        }
         match self.alpha {
-            Alpha::Constant(a) => driver.run(&momentum::<K, IAD, false>(flow, f, n, a, &[]), out),
-            Alpha::PerParticle(a) => {
-                driver.run(&momentum::<K, IAD, true>(flow, f, n, 0.0, &a[..n]), out)
-            }
+            Alpha::Constant(a) => go!(false, a, &[]),
+            Alpha::PerParticle(a) => go!(true, 0.0, &a[..n]),
         }
     }
 }
 
 /// The momentum stage over `flow` with the pair factors `f` (cut to `n`).
-fn momentum<'a, K, const IAD: bool, const SWITCHED: bool>(
+fn momentum<'a, K, const IAD: bool, const SWITCHED: bool, const VE: bool, const SPHEXA: bool>(
     flow: Flow<'a, K>,
     f: &'a PairFactors,
     n: usize,
     alpha: f64,
     alpha_per: &'a [f64],
-) -> Momentum<'a, K, IAD, SWITCHED> {
+    xm: &'a [f64],
+) -> Momentum<'a, K, IAD, SWITCHED, VE, SPHEXA> {
     Momentum {
         flow,
         inv_h: &f.inv_h[..n],
@@ -241,19 +340,23 @@ fn momentum<'a, K, const IAD: bool, const SWITCHED: bool>(
         pre: &f.pre[..n],
         alpha,
         alpha_per,
+        xm,
     }
 }
 
 /// The momentum and energy sums; `SWITCHED` selects `alpha_ij =
 /// (alpha_per[i] + alpha_per[j]) / 2` over the constant `alpha` at compile
-/// time, `IAD` the gradient operator.
-struct Momentum<'a, K, const IAD: bool, const SWITCHED: bool> {
+/// time, `IAD` the gradient operator, `VE` the volume-element weights
+/// (`xm`), `SPHEXA` the viscosity and signal-velocity form
+/// ([`AvForm::SphExa`]).
+struct Momentum<'a, K, const IAD: bool, const SWITCHED: bool, const VE: bool, const SPHEXA: bool> {
     flow: Flow<'a, K>,
     inv_h: &'a [f64],
     inv_rho: &'a [f64],
     pre: &'a [f64],
     alpha: f64,
     alpha_per: &'a [f64],
+    xm: &'a [f64],
 }
 
 /// What the pair stages read of every particle, cut to one length (so
@@ -315,6 +418,9 @@ struct MomentumSums {
     pre_i: F64s,
     inv_rho_i: F64s,
     alpha_i: F64s,
+    /// Density and volume element of the targets (volume elements only).
+    rho_i: F64s,
+    xm_i: F64s,
     ci_m: [F64s; 6],
     acc_a: [F64s; 3],
     /// `sum_j m_j v_ij . A_ij(h_i)`
@@ -324,8 +430,8 @@ struct MomentumSums {
     acc_vsig: F64s,
 }
 
-impl<K: Kernel, const IAD: bool, const SWITCHED: bool> PairStage
-    for Momentum<'_, K, IAD, SWITCHED>
+impl<K: Kernel, const IAD: bool, const SWITCHED: bool, const VE: bool, const SPHEXA: bool> PairStage
+    for Momentum<'_, K, IAD, SWITCHED, VE, SPHEXA>
 {
     type Sums = MomentumSums;
     type Out<'o> = [&'o mut [f64]; 4];
@@ -353,6 +459,8 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool> PairStage
             } else {
                 F64s::splat(self.alpha)
             },
+            rho_i: if VE { g.load(self.flow.rho) } else { zero },
+            xm_i: if VE { g.load(self.xm) } else { zero },
             ci_m: if IAD {
                 self.flow.iad.map(|c| g.load(c))
             } else {
@@ -362,7 +470,7 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool> PairStage
             acc_ep: zero,
             acc_eav: zero,
             acc_div: zero,
-            acc_vsig: ci,
+            acc_vsig: if SPHEXA { zero } else { ci },
         }
     }
 
@@ -408,24 +516,40 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool> PairStage
             vi[2] - self.flow.v[2][j],
         ];
         let w = (vij[0] * d[0] + vij[1] * d[1] + vij[2] * d[2]) * inv_r;
-        let vsig = t.ci + self.flow.c[j] - 3.0 * w.min(zero);
-        t.acc_vsig = t.acc_vsig.max(vsig * weight);
         let alpha_ij = if SWITCHED {
             0.5 * (t.alpha_i + self.alpha_per[j])
         } else {
             F64s::splat(self.alpha)
         };
-        let visc = w.where_negative(-0.5 * alpha_ij * vsig * w);
+        let visc = if SPHEXA {
+            let cij = t.ci + self.flow.c[j];
+            // Courant: (c_i + c_j)/2 - 2 w over every neighbour.
+            t.acc_vsig = t.acc_vsig.max((0.5 * cij - 2.0 * w) * weight);
+            w.where_negative(-(0.5 * alpha_ij * cij - 2.0 * w) * w)
+        } else {
+            let vsig = t.ci + self.flow.c[j] - 3.0 * w.min(zero);
+            t.acc_vsig = t.acc_vsig.max(vsig * weight);
+            w.where_negative(-0.5 * alpha_ij * vsig * w)
+        };
         let vi_r = 0.5 * visc * t.inv_rho_i;
         let inv_rho_j = self.inv_rho[j];
         let vj_r = 0.5 * visc * inv_rho_j;
-        let (ci_f, cj_f) = (t.pre_i + vi_r, self.pre[j] + vj_r);
+        let (ci_f, cj_f, a_mom) = if VE {
+            let (a, b) = atwood_weights(t.rho_i, self.flow.rho[j], t.xm_i, self.xm[j]);
+            (t.pre_i * a + vi_r, self.pre[j] * b + vj_r, a)
+        } else {
+            (t.pre_i + vi_r, self.pre[j] + vj_r, F64s::splat(1.0))
+        };
         for c in 0..3 {
             t.acc_a[c] -= mj * (ci_f * ai[c] + cj_f * aj[c]);
         }
         let vai = vij[0] * ai[0] + vij[1] * ai[1] + vij[2] * ai[2];
         let vaj = vij[0] * aj[0] + vij[1] * aj[1] + vij[2] * aj[2];
-        t.acc_ep += mj * vai;
+        if VE {
+            t.acc_ep += mj * a_mom * vai;
+        } else {
+            t.acc_ep += mj * vai;
+        }
         t.acc_eav += mj * (vi_r * vai + vj_r * vaj);
         t.acc_div -= mj * inv_rho_j * vai;
     }
@@ -436,12 +560,22 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool> PairStage
         t.acc_a[1].store(ay);
         t.acc_a[2].store(az);
         (t.pre_i * t.acc_ep + 0.5 * t.acc_eav).store(du);
-        let h_over_vsig = (1.0 / (t.inv_hi * t.acc_vsig)).to_array();
+        let vsig = if SPHEXA {
+            F64s::select_positive(t.acc_vsig, t.acc_vsig, t.ci)
+        } else {
+            t.acc_vsig
+        };
+        let h_over_vsig = (1.0 / (t.inv_hi * vsig)).to_array();
         let div = t.acc_div.to_array();
         let mut st = MomentumStats::identity();
         for l in 0..g.valid {
             st.min_h_over_vsig = st.min_h_over_vsig.min(h_over_vsig[l]);
-            st.max_abs_div_v = st.max_abs_div_v.max(div[l].abs());
+            let d = if SPHEXA {
+                div[l].max(0.0)
+            } else {
+                div[l].abs()
+            };
+            st.max_abs_div_v = st.max_abs_div_v.max(d);
         }
         st
     }
@@ -461,6 +595,38 @@ impl Reduce for MomentumStats {
             max_abs_div_v: self.max_abs_div_v.max(b.max_abs_div_v),
         }
     }
+}
+
+/// SPH-EXA's momentum weights `(a_ij, b_ij)` of pair `i, j` from the
+/// Atwood number of the densities and the volume elements (see
+/// [`momentum_energy_with`]); `b_ij` of `i, j` is bit for bit `a_ji`, so
+/// the pair terms stay antisymmetric.
+#[inline(always)]
+fn atwood_weights(rho_i: F64s, rho_j: f64, xi: F64s, xj: f64) -> (F64s, F64s) {
+    let rho_j = F64s::splat(rho_j);
+    let at = (rho_i - rho_j).abs() / (rho_i + rho_j);
+    let xj_l = F64s::splat(xj);
+    let cross = xi * xj_l;
+    let low = at.lt(F64s::splat(ATWOOD_MIN));
+    let high = at.gt(F64s::splat(ATWOOD_MAX));
+    let mut a = low.select(xi * xi, cross);
+    let mut b = low.select(xj_l * xj_l, cross);
+    if !(low | high).all() {
+        // The ramp, lane by lane (rare: interfaces).
+        let at_l = at.to_array();
+        let (xi_l, mut al, mut bl) = (xi.to_array(), a.to_array(), b.to_array());
+        let ramp = 1.0 / (ATWOOD_MAX - ATWOOD_MIN);
+        for l in 0..LANES {
+            if (ATWOOD_MIN..=ATWOOD_MAX).contains(&at_l[l]) {
+                let s = ramp * (at_l[l] - ATWOOD_MIN);
+                al[l] = xi_l[l].powf(2.0 - s) * xj.powf(s);
+                bl[l] = xj.powf(2.0 - s) * xi_l[l].powf(s);
+            }
+        }
+        a = F64s::from_array(al);
+        b = F64s::from_array(bl);
+    }
+    (a, b)
 }
 
 #[inline(always)]

@@ -526,3 +526,40 @@ fn results_do_not_depend_on_thread_count() {
         .install(run);
     assert_eq!(many, one);
 }
+
+/// The lattice of [`linear_setup`] with the velocity field `v = G x`,
+/// `d_a v_b = g[a][b]`, and the Balsara factors of its particles at least
+/// two smoothing lengths inside the box.
+fn balsara_of(g: [[f64; 3]; 3]) -> Vec<f64> {
+    let (mut s, _) = linear_setup(0.0, 5);
+    for i in 0..s.p.len() {
+        let x = [s.p.x[i], s.p.y[i], s.p.z[i]];
+        let v: [f64; 3] = std::array::from_fn(|b| g[0][b] * x[0] + g[1][b] * x[1] + g[2][b] * x[2]);
+        (s.p.vx[i], s.p.vy[i], s.p.vz[i]) = (v[0], v[1], v[2]);
+        s.p.u[i] = 1.0;
+    }
+    refresh(&mut s);
+    let (div_v, curl_v) = divergence(&s, Gradients::Iad);
+    let p = &s.p;
+    (0..p.len())
+        .filter(|&i| {
+            [p.x[i], p.y[i], p.z[i]]
+                .iter()
+                .all(|c| c.abs() < 0.5 - 2.0 * p.h[i])
+        })
+        .map(|i| sph_core::av_switch::balsara(div_v[i], curl_v[i], p.c[i], p.h[i]))
+        .collect()
+}
+
+#[test]
+fn balsara_factor_is_zero_in_shear_and_one_in_compression() {
+    // Pure shear v_x = y: div v = 0, |curl v| = 1.
+    let shear = balsara_of([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]]);
+    assert!(!shear.is_empty());
+    let worst = shear.iter().cloned().fold(0.0, f64::max);
+    assert!(worst < 1e-9, "shear: Balsara factor up to {worst:e}");
+    // Pure compression v = -x: curl v = 0, div v = -3 (c ~ 0.8, h ~ 0.24).
+    let squeeze = balsara_of([[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]]);
+    let least = squeeze.iter().cloned().fold(1.0, f64::min);
+    assert!(least > 0.999, "compression: Balsara factor down to {least}");
+}

@@ -160,6 +160,19 @@ impl Mask {
     pub fn select(self, a: F64s, b: F64s) -> F64s {
         F64s(self.0.select(a.0, b.0))
     }
+
+    /// Whether every lane is set.
+    ///
+    /// ```
+    /// use sph_kernels::F64s;
+    /// let v = F64s::splat(1.0);
+    /// assert!(v.gt(F64s::splat(0.0)).all());
+    /// assert!(!(v.lt(F64s::splat(0.0)) | v.gt(F64s::splat(2.0))).all());
+    /// ```
+    #[inline(always)]
+    pub fn all(self) -> bool {
+        self.0.all()
+    }
 }
 
 impl std::ops::BitOr for Mask {

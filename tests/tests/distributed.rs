@@ -9,7 +9,10 @@
 //! Every run must give byte-identical files. The `drift` case moves a
 //! uniform gas across the periodic boundaries so that particles migrate
 //! between ranks every few steps: no particle may be lost or duplicated,
-//! and mass, momentum and energy must be conserved.
+//! and mass, momentum and energy must be conserved. `sedov-ve` is Sedov
+//! with the `ve` preset (volume elements, switches: halo refreshes of X,
+//! k, div v and alpha). `SPH_DISTRIBUTED_ONLY=sedov-ve,drift` runs only
+//! the cases named.
 
 use sph_apps::cases::{self, Scene};
 use sph_apps::simulation::{Progress, Stop};
@@ -24,8 +27,9 @@ use std::time::{Duration, Instant};
 /// Particles per side and steps of each run: (case, side, steps). Every
 /// registered case runs (with [`DEFAULT_SIZE`] unless listed here), then
 /// the test-only `drift` case.
-const SIZES: [(&str, usize, u64); 5] = [
+const SIZES: [(&str, usize, u64); 6] = [
     ("sedov", 24, 20),
+    ("sedov-ve", 24, 20),
     ("square-patch", 20, 20),
     ("noh", 20, 20),
     ("drift", 16, 30),
@@ -34,11 +38,17 @@ const SIZES: [(&str, usize, u64); 5] = [
 /// Side and steps of a registered case missing from [`SIZES`].
 const DEFAULT_SIZE: (usize, u64) = (16, 20);
 
-/// The runs: every registered case, then `drift`, with their sizes.
+/// The runs: every registered case, then `drift` and `sedov-ve`, with
+/// their sizes (only those in `SPH_DISTRIBUTED_ONLY`, when set).
 fn runs() -> Vec<(&'static str, usize, u64)> {
+    let only = std::env::var("SPH_DISTRIBUTED_ONLY").ok();
     cases::names()
         .into_iter()
-        .chain(["drift"])
+        .chain(["drift", "sedov-ve"])
+        .filter(|case| {
+            only.as_ref()
+                .is_none_or(|o| o.split(',').any(|c| c == *case))
+        })
         .map(|case| {
             let (side, steps) = SIZES
                 .iter()
@@ -91,6 +101,14 @@ fn scene(case: &str) -> Scene {
         }
         s.dt0 = 2e-3;
         s.reference = None;
+        return s;
+    }
+    if case == "sedov-ve" {
+        let mut s = cases::lookup("sedov")
+            .expect("sedov")
+            .setup(side, HydroConfig::default())
+            .unwrap();
+        s.config.scheme = sph_core::Scheme::VE;
         return s;
     }
     // Each case with its own scheme, applied by its set-up (noh: kernel

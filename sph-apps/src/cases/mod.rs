@@ -518,6 +518,7 @@ mod tests {
                     grad_h: false,
                     viscosity: sph_core::Viscosity::Constant { alpha: 3.0 },
                     conductivity: Some(1.0),
+                    ..Scheme::PAPER
                 },
                 ..Default::default()
             };
