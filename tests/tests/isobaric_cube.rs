@@ -5,9 +5,8 @@
 //! The exact solution is the initial state, so there is no null solution
 //! to reject: the checks are how far the run strays from it. Measured
 //! v_rms / mean c at t = 1 (2 threads): paper 0.067 at 16 and 0.062 at 24,
-//! ve 0.049 at 16
-//! and 0.044 at 24, ve-ac 0.049 at 16. VALIDATION's goal, 1e-2, is not met
-//! by any scheme here: the lattices' contact launches waves that fill the
+//! ve 0.049 at 16 and 0.044 at 24, ve-ac 0.049 at 16. VALIDATION's goal,
+//! 1e-2, is not met by any scheme here: the lattices' contact launches waves that fill the
 //! box (|v| ~ 0.05 far from the interface too). The bound below is the
 //! measured 0.067 plus 20%, a regression guard, not the goal. The cube
 //! itself survives: its core keeps rho ~ 8, the thin gas rho ~ 1.
