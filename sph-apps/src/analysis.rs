@@ -8,7 +8,7 @@
 //! leaves its rank. Floating-point sums are exact ([`ExactSum`]), so the
 //! results do not depend on the number of ranks or threads.
 
-use crate::cases::Reference;
+use crate::cases::{Curve, Reference, CURVE_MAX_SUMS};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -207,6 +207,33 @@ pub fn peak_radius(bins: &[Bin]) -> f64 {
         .filter(|b| b.count > 0)
         .max_by(|a, b| a.rho.total_cmp(&b.rho))
         .map_or(f64::NAN, |b| b.r)
+}
+
+/// The values of `curve` over the owned particles of all ranks (exact
+/// sums, one all-reduce).
+///
+/// # Panics
+/// If the curve asks for more than [`CURVE_MAX_SUMS`] sums.
+pub fn curve_values<C: Communicator>(
+    p: &Particles,
+    owned: Range<usize>,
+    comm: &C,
+    curve: &Curve,
+) -> Vec<f64> {
+    let k = curve.sums;
+    assert!(
+        k <= CURVE_MAX_SUMS,
+        "a curve has at most {CURVE_MAX_SUMS} sums"
+    );
+    let sums = exact_sums(owned, k, comm, |i, s| {
+        let mut terms = [0.0; CURVE_MAX_SUMS];
+        (curve.terms)(p, i, &mut terms[..k]);
+        for (sum, &t) in s.iter_mut().zip(&terms[..k]) {
+            sum.add(t);
+        }
+    });
+    let totals: Vec<f64> = sums.iter().map(ExactSum::value).collect();
+    (curve.finish)(&totals)
 }
 
 /// The outermost coordinate where the binned density falls through

@@ -257,13 +257,26 @@ pub fn energy_png(
     series: &[EnergySeries<'_>],
     reference: &[EnergySeries<'_>],
 ) -> Result<(), AppError> {
-    render_energy(path, title, series, reference)
+    series_png(path, title, "energy", series, reference)
+}
+
+/// Writes a PNG of quantities against time, as [`energy_png`] does, with
+/// `y_label` on the vertical axis.
+pub fn series_png(
+    path: &Path,
+    title: &str,
+    y_label: &str,
+    series: &[EnergySeries<'_>],
+    reference: &[EnergySeries<'_>],
+) -> Result<(), AppError> {
+    render_series(path, title, y_label, series, reference)
         .map_err(|e| AppError::io(path, std::io::Error::other(e.to_string())))
 }
 
-fn render_energy(
+fn render_series(
     path: &Path,
     title: &str,
+    y_label: &str,
     series: &[EnergySeries<'_>],
     reference: &[EnergySeries<'_>],
 ) -> Result<(), Box<dyn Error>> {
@@ -285,7 +298,7 @@ fn render_energy(
     chart
         .configure_mesh()
         .x_desc("t")
-        .y_desc("energy")
+        .y_desc(y_label)
         .x_label_formatter(&x_fmt)
         .y_label_formatter(&y_fmt)
         .label_style((FAMILY, 17))

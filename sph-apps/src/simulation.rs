@@ -9,6 +9,7 @@
 use crate::analysis::{self, Bin, L1};
 use crate::cases::{Reference, Scene, Share};
 use crate::output::conserved::ConservedCsv;
+use crate::output::curve::CurveCsv;
 use crate::output::energies::EnergyTrack;
 use crate::output::progress::ProgressReporter;
 use crate::output::snapshot::{self as snapfile, Schedule};
@@ -383,6 +384,13 @@ impl<C: Communicator> Simulation<C> {
             Some(_) => self.hydro.time(),
             None => f64::NEG_INFINITY,
         };
+        let mut curve = match (root, self.scene.curve) {
+            (true, Some(c)) => Some(match self.resumed_at {
+                Some(step) => CurveCsv::resume(&out.join("curve.csv"), c, step)?,
+                None => CurveCsv::create(&out.join("curve.csv"), c)?,
+            }),
+            _ => None,
+        };
         let mut files = FileOutputs::new(&self.outputs, out, t0);
         if files.any() && root {
             for dir in [files.snapshot_dir.as_path(), files.checkpoint_dir.as_path()] {
@@ -411,6 +419,19 @@ impl<C: Communicator> Simulation<C> {
                 conserved.step(&r, n)?;
                 timings.step(&r, &totals)?;
             }
+            if let Some(c) = &self.scene.curve {
+                // Collective: every rank adds its particles.
+                let values = analysis::curve_values(
+                    &self.scene.particles,
+                    self.hydro.owned(),
+                    self.hydro.domain().comm(),
+                    c,
+                );
+                // The values are of the particles after the step.
+                if let Some(file) = curve.as_mut() {
+                    file.push(r.step, self.hydro.time(), values)?;
+                }
+            }
             bar.update(&r, self.hydro.time());
             neighbors_total = Some(r.neighbors.total);
             if files.any() && self.write_files(&mut files)? {
@@ -419,6 +440,9 @@ impl<C: Communicator> Simulation<C> {
                 if let Some((conserved, timings)) = logs.as_mut() {
                     conserved.flush()?;
                     timings.flush()?;
+                }
+                if let Some(file) = curve.as_mut() {
+                    file.flush()?;
                 }
             }
         }
@@ -432,6 +456,13 @@ impl<C: Communicator> Simulation<C> {
         if let Some((conserved, timings)) = logs.as_mut() {
             conserved.flush()?;
             timings.flush()?;
+        }
+        if let Some(file) = curve.as_mut() {
+            file.flush()?;
+            file.plot(
+                &out.join("curve.png"),
+                &format!("{}, {n} particles", self.scene.case),
+            )?;
         }
 
         let end = self.observe_end()?;

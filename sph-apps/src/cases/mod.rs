@@ -46,6 +46,7 @@ registry! {
     sod::SodTube,
     gresho::GreshoVortex,
     isobaric_cube::IsobaricCube,
+    kelvin_helmholtz::KelvinHelmholtz,
 }
 
 /// Every case, in listing order (the same as [`CASES`]).
@@ -151,6 +152,12 @@ pub trait Case: Sync + std::fmt::Debug {
         None
     }
 
+    /// A quantity the case tracks every step (`curve.csv`, `curve.png`),
+    /// if any.
+    fn curve(&self) -> Option<Curve> {
+        None
+    }
+
     /// The scene for `side` particles per side with the case's own scheme
     /// written over `config` (whose other settings, e.g. neighbour counts,
     /// Courant factor, conductivity, curve, gravity's opening angle, are
@@ -196,6 +203,7 @@ pub trait Case: Sync + std::fmt::Debug {
             dt0: initial.dt0,
             reference,
             energies: self.energies(),
+            curve: self.curve(),
         })
     }
 }
@@ -459,6 +467,33 @@ pub struct Scene {
     pub reference: Option<Reference>,
     /// Reference energies over time, if any.
     pub energies: Option<&'static [EnergyPoint]>,
+    /// The quantity tracked every step, if any.
+    pub curve: Option<Curve>,
+}
+
+/// Most per-particle sums a [`Curve`] may use.
+pub const CURVE_MAX_SUMS: usize = 8;
+
+/// A case's observable over time, built from sums over all particles so
+/// that it is exact and the same on any number of ranks: each step the
+/// run adds `terms` of every particle into `sums` exact sums, reduces them
+/// over the ranks and writes `finish` of the totals as one line of
+/// `curve.csv` (`step, t, columns...`); `curve.png` plots the columns with
+/// the `reference` points as markers.
+#[derive(Debug, Clone, Copy)]
+pub struct Curve {
+    /// Axis label of the plot.
+    pub label: &'static str,
+    /// Names of the values `finish` returns (the CSV columns after `t`).
+    pub columns: &'static [&'static str],
+    /// Number of per-particle sums (at most [`CURVE_MAX_SUMS`]).
+    pub sums: usize,
+    /// Writes particle `i`'s term of each sum into `out` (`sums` long).
+    pub terms: fn(&Particles, usize, &mut [f64]),
+    /// The values (one per column) from the totals.
+    pub finish: fn(&[f64]) -> Vec<f64>,
+    /// Reference `(t, value)` points of the first column, if any.
+    pub reference: &'static [(f64, f64)],
 }
 
 /// Particles of an `n^3` lattice of cell centres in the cube

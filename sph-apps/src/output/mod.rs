@@ -8,12 +8,14 @@
 //! | `timings.csv` | [`timings`] | rank 0, one line per step and the means |
 //! | `profile.csv`, `profile.png` | [`profile`] | rank 0, from the reduced profile |
 //! | `energies.png` | [`energies`] | rank 0, from the per-step energies |
+//! | `curve.csv`, `curve.png` | [`curve`] | rank 0, a case's tracked observable each step (reduced over the ranks) |
 //! | `particles.csv` | [`particles`] | rank 0, streamed from every rank in bounded chunks |
 //! | `summary.json` | [`summary`] | rank 0, last |
 //! | `snapshots/snapshot_SSSSSSSS.h5`, `checkpoints/checkpoint_SSSSSSSS.h5` | [`snapshot`], [`crate::checkpoint`] | every rank its own rows, into one file |
 
 pub mod conserved;
 mod csv;
+pub mod curve;
 pub mod energies;
 pub mod particles;
 pub mod profile;
