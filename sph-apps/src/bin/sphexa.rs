@@ -107,9 +107,12 @@ struct RunArgs {
           value_parser = parse_count)]
     ngmax: usize,
     /// Scheme preset to start from instead of the case's own: `paper`
-    /// (the seed paper's eqs. 1-5: IAD, grad-h, constant alpha = 1), `noh`
-    /// (kernel gradients, grad-h, switches up to alpha 0.7), `evrard`
-    /// (kernel gradients, no grad-h, switches up to alpha 0.5). The options
+    /// (the seed paper's eqs. 1-5: IAD, grad-h, constant alpha = 1), `std`
+    /// (SPH-EXA's std: as paper without grad-h), `ve` (SPH-EXA's default:
+    /// volume elements, grad-h, IAD, its switches), `ve-ac` (ve without
+    /// grad-h, with conductivity 1), `noh` (kernel gradients, grad-h,
+    /// switches up to alpha 0.7), `evrard` (kernel gradients, no grad-h,
+    /// switches up to alpha 0.5); `sphexa cases` lists them. The options
     /// below override it one by one.
     #[arg(long, value_name = "NAME")]
     scheme: Option<String>,
