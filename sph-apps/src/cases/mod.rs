@@ -47,6 +47,7 @@ registry! {
     gresho::GreshoVortex,
     isobaric_cube::IsobaricCube,
     kelvin_helmholtz::KelvinHelmholtz,
+    wind_shock::WindShock,
 }
 
 /// Every case, in listing order (the same as [`CASES`]).

@@ -1,0 +1,152 @@
+//! Wind-shock (cloud crushing): a cold dense cloud (radius 0.025, rho 10)
+//! at rest in a hot supersonic wind (rho 1, u 1.5, v_x 2.7, Mach 2.1) in
+//! the periodic box `1 x 0.25 x 0.25`, in pressure equilibrium, gamma 5/3
+//! (`../shared/VALIDATION.md`). The wind shocks on the cloud and strips
+//! it; the observable is the surviving cloud fraction against t / tau_KH
+//! (tau_KH = 0.0937): the mass with rho >= 0.64 rho_cloud and
+//! u <= 0.9 u_wind (temperature at most 0.9 of the wind's) over the
+//! nominal cloud mass, in `curve.csv` every step. The test of the case
+//! is robustness (no NaN, no negative u) to 2 tau_KH.
+//!
+//! Both gases are cubic lattices of equal-mass particles, the cloud's
+//! spacing 10^(-1/3) of the wind's.
+
+use super::{field_set, initial_h, Case, Curve, InitialState, Listing, Reference, Scheme, Share};
+use crate::AppError;
+use sph_core::{HydroConfig, Particles};
+use sph_tree::{Boundary, BoundingBox};
+
+/// The case (registered as `wind-shock`).
+#[derive(Debug, Clone, Copy)]
+pub struct WindShock;
+
+/// Adiabatic index (that of the default gas, [`super::Physics::IDEAL_GAS`]).
+pub const GAMMA: f64 = 5.0 / 3.0;
+/// Cloud radius.
+pub const RADIUS: f64 = 0.025;
+/// Cloud density.
+pub const RHO_CLOUD: f64 = 10.0;
+/// Wind density.
+pub const RHO_WIND: f64 = 1.0;
+/// Wind specific internal energy.
+pub const U_WIND: f64 = 1.5;
+/// Wind speed along x.
+pub const V_WIND: f64 = 2.7;
+/// Kelvin-Helmholtz time of the cloud (VALIDATION.md).
+pub const TAU_KH: f64 = 0.0937;
+/// Box size (x, y, z).
+pub const BOX: [f64; 3] = [1.0, 0.25, 0.25];
+/// Cloud centre.
+pub const CENTRE: [f64; 3] = [0.125, 0.125, 0.125];
+
+/// Particle `i`'s surviving-cloud mass.
+fn survival_terms(p: &Particles, i: usize, out: &mut [f64]) {
+    let cold = p.u[i] <= 0.9 * U_WIND;
+    let dense = p.rho[i] >= 0.64 * RHO_CLOUD;
+    out[0] = if cold && dense { p.m[i] } else { 0.0 };
+}
+
+/// The surviving mass over the nominal cloud mass `rho_c 4/3 pi R^3` (the
+/// lattice cut to the sphere holds a few percent more or less).
+fn survival_fraction(sums: &[f64]) -> Vec<f64> {
+    let cloud = RHO_CLOUD * 4.0 / 3.0 * std::f64::consts::PI * RADIUS.powi(3);
+    vec![sums[0] / cloud]
+}
+
+impl Case for WindShock {
+    /// `side` wind particles per unit length (the box is `side x side/4 x
+    /// side/4`; `side` a multiple of 4): 64 gives 16,384 wind and 176
+    /// cloud particles.
+    fn listing(&self) -> Listing {
+        Listing {
+            name: "wind-shock",
+            description: "Dense cloud in a supersonic wind (cloud crushing): surviving fraction vs t/tau_KH",
+            side: 64,
+            end_time: 2.0 * TAU_KH,
+        }
+    }
+
+    /// SPH-EXA's default scheme, `ve`.
+    fn default_scheme(&self) -> Scheme {
+        Scheme::VE
+    }
+
+    fn initial_state(
+        &self,
+        side: usize,
+        config: &HydroConfig,
+        share: Share,
+    ) -> Result<InitialState, AppError> {
+        if !side.is_multiple_of(4) {
+            return Err(AppError::Usage(format!(
+                "case wind-shock: {side} particles per unit length; it must be a multiple of 4 (the box is 1 x 0.25 x 0.25)"
+            )));
+        }
+        let d = 1.0 / side as f64;
+        let dc = d * (RHO_WIND / RHO_CLOUD).cbrt();
+        let dist = |q: [f64; 3]| {
+            ((q[0] - CENTRE[0]).powi(2) + (q[1] - CENTRE[1]).powi(2) + (q[2] - CENTRE[2]).powi(2))
+                .sqrt()
+        };
+        let lattice = |spacing: f64, lo: [f64; 3], counts: [usize; 3]| {
+            (0..counts[0] * counts[1] * counts[2]).map(move |g| {
+                let c = [g % counts[0], g / counts[0] % counts[1], g / (counts[0] * counts[1])];
+                std::array::from_fn::<f64, 3, _>(|k| lo[k] + (c[k] as f64 + 0.5) * spacing)
+            })
+        };
+        let wind_counts = [side, side / 4, side / 4];
+        let mut pts: Vec<([f64; 3], bool)> = lattice(d, [0.0; 3], wind_counts)
+            .filter(|&q| dist(q) >= RADIUS)
+            .map(|q| (q, false))
+            .collect();
+        let k = (2.0 * RADIUS / dc).ceil() as usize + 1;
+        let lo = CENTRE.map(|c| c - 0.5 * k as f64 * dc);
+        pts.extend(
+            lattice(dc, lo, [k; 3])
+                .filter(|&q| dist(q) < RADIUS)
+                .map(|q| (q, true)),
+        );
+        let n = pts.len();
+        let m = RHO_WIND * d * d * d;
+        let h_wind = initial_h(config.neighbors.ng0, d * d * d, 1);
+        let pressure = (GAMMA - 1.0) * RHO_WIND * U_WIND;
+        let (mut p, mine) = share.particles(n, field_set(config));
+        for (k, &(q, cloud)) in pts[mine].iter().enumerate() {
+            (p.x[k], p.y[k], p.z[k]) = (q[0], q[1], q[2]);
+            p.m[k] = m;
+            if cloud {
+                p.h[k] = h_wind * dc / d;
+                p.u[k] = pressure / ((GAMMA - 1.0) * RHO_CLOUD);
+            } else {
+                p.h[k] = h_wind;
+                p.u[k] = U_WIND;
+                p.vx[k] = V_WIND;
+            }
+        }
+        Ok(InitialState {
+            total: n,
+            particles: p,
+            bbox: BoundingBox::new([0.0; 3], BOX, [Boundary::Periodic; 3])?,
+            dt0: 1e-5 * 64.0 * d,
+        })
+    }
+
+    fn reference(
+        &self,
+        _side: usize,
+        _initial: &InitialState,
+    ) -> Result<Option<Reference>, AppError> {
+        Ok(None)
+    }
+
+    fn curve(&self) -> Option<Curve> {
+        Some(Curve {
+            label: "surviving cloud fraction",
+            columns: &["surviving_fraction"],
+            sums: 1,
+            terms: survival_terms,
+            finish: survival_fraction,
+            reference: &[],
+        })
+    }
+}
