@@ -51,6 +51,8 @@
 mod error;
 pub mod foreign;
 pub mod h5part;
+#[cfg(feature = "hdf5-c")]
+pub mod h5part_c;
 pub mod slab;
 mod snapshot;
 
@@ -58,6 +60,8 @@ use std::path::Path;
 
 pub use error::IoError;
 pub use h5part::H5Part;
+#[cfg(feature = "hdf5-c")]
+pub use h5part_c::H5PartC;
 pub use snapshot::{Attr, BoxSpec, Field, FieldData, FieldType, Selection, Snapshot};
 
 /// Writes snapshots to a file.
