@@ -2,7 +2,7 @@
 //! particles x 12 fields (11 `f64`, one `u64` id; 96 MB of field data),
 //! each write including the CRC32s, the fsync and the rename, each read
 //! including the checks. Prints every repeat and the range, per backend:
-//! `cargo bench -p sph-io --features hdf5-c --bench backends [-- REPEATS]`.
+//! `cargo bench -p sph-io --features hdf5-c --bench backends [-- REPEATS] [c-first]`.
 
 use std::hint::black_box;
 use std::path::Path;
@@ -61,7 +61,13 @@ fn main() {
         "1e6 particles x {} fields = {mb:.0} MB, {repeats} repeats",
         snap.fields.len()
     );
-    for (name, c) in [("hdf5-pure (H5Part)", false), ("libhdf5 (H5PartC)", true)] {
+    let mut order = [("hdf5-pure (H5Part)", false), ("libhdf5 (H5PartC)", true)];
+    // `c-first`: measure the libhdf5 backend first (order effects of the
+    // page cache and of the disk's write-back).
+    if std::env::args().any(|a| a == "c-first") {
+        order.reverse();
+    }
+    for (name, c) in order {
         let path = dir.path().join("bench.h5");
         let (mut w, mut r) = (Vec::new(), Vec::new());
         for _ in 0..repeats {

@@ -40,10 +40,12 @@
 //! no panic on 80,000 randomly corrupted files. Measured on 1e6 particles x
 //! 10 fields (80 MB, page cache, this crate's bench): write 0.8-1.1 GB/s
 //! (including the CRC32s, the fsync and the rename), read and verify
-//! 2.4-4.6 GB/s. The C library through `hdf5-metno` 0.15 (libhdf5 1.10.8)
-//! wrote the same data at 1.4 GB/s with an fsync (2 GB/s without) and read
-//! it at about 20 GB/s: faster, but it needs libhdf5 installed, so it is
-//! left for an optional feature if output speed ever matters more.
+//! 2.4-4.6 GB/s. The C library is the optional backend
+//! `H5PartC` (module `h5part_c`, feature `hdf5-c`, `hdf5-metno` 0.15.1 on
+//! libhdf5 1.10.8), which writes the same files; measured side by side on
+//! 1e6 particles x 12 fields it writes about 1.4x faster (medians
+//! 870-1280 MB/s against 640-920) and reads no faster (1.7-2.9 GB/s against
+//! 1.9-3.0), not enough to make libhdf5 a requirement (see the crate docs).
 
 use std::collections::HashMap;
 use std::io::Write;

@@ -6,7 +6,7 @@
 //! # Layout
 //! Byte for byte the files differ (libhdf5 lays out its own object headers,
 //! symbol tables and heaps), but the content is the one the
-//! [`h5part`](crate::h5part) module describes: groups `Step#k`, one 1-D
+//! [`h5part`](crate::h5part#layout) module describes: groups `Step#k`, one 1-D
 //! little-endian `f64`/`u64` dataset per field with its `crc32` attribute
 //! (u32), the step attributes of the same names, types and shapes (scalars
 //! as scalar dataspaces, arrays as 1-D ones, strings as fixed-width
