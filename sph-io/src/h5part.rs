@@ -40,10 +40,12 @@
 //! no panic on 80,000 randomly corrupted files. Measured on 1e6 particles x
 //! 10 fields (80 MB, page cache, this crate's bench): write 0.8-1.1 GB/s
 //! (including the CRC32s, the fsync and the rename), read and verify
-//! 2.4-4.6 GB/s. The C library through `hdf5-metno` 0.15 (libhdf5 1.10.8)
-//! wrote the same data at 1.4 GB/s with an fsync (2 GB/s without) and read
-//! it at about 20 GB/s: faster, but it needs libhdf5 installed, so it is
-//! left for an optional feature if output speed ever matters more.
+//! 2.4-4.6 GB/s. The C library is the optional backend
+//! `H5PartC` (module `h5part_c`, feature `hdf5-c`, `hdf5-metno` 0.15.1 on
+//! libhdf5 1.10.8), which writes the same files; measured side by side on
+//! 1e6 particles x 12 fields it writes about 1.4x faster (medians
+//! 870-1280 MB/s against 640-920) and reads no faster (1.7-2.9 GB/s against
+//! 1.9-3.0), not enough to make libhdf5 a requirement (see the crate docs).
 
 use std::collections::HashMap;
 use std::io::Write;
@@ -153,13 +155,16 @@ impl SnapshotWriter for H5Part {
 
 /// What one step group holds: its attributes and its fields with their
 /// checksums.
-struct StepPlan<'a> {
-    attrs: Vec<(String, AttrValue)>,
-    fields: Vec<(&'a Field, u32)>,
+pub(crate) struct StepPlan<'a> {
+    pub(crate) attrs: Vec<(String, AttrValue)>,
+    pub(crate) fields: Vec<(&'a Field, u32)>,
 }
 
 /// Validates `snap` and lays out its step group (fields `select` names).
-fn plan_step<'a>(snap: &'a Snapshot, select: &Selection) -> Result<StepPlan<'a>, IoError> {
+pub(crate) fn plan_step<'a>(
+    snap: &'a Snapshot,
+    select: &Selection,
+) -> Result<StepPlan<'a>, IoError> {
     snap.validate()?;
     let fields = selected_fields(snap, select)?;
     let table: Vec<(&str, FieldType)> = fields
@@ -367,7 +372,7 @@ fn meta_crc(
 /// Makes `path` + `.tmp` (a copy of `copy_from`, or empty), lets `body`
 /// write into it, syncs it, then renames it onto `path`; the temporary file
 /// is removed on failure, so `path` is either as before or complete.
-fn write_atomic(
+pub(crate) fn write_atomic(
     path: &Path,
     copy_from: Option<&Path>,
     body: impl FnOnce(&std::fs::File) -> Result<(), IoError>,
@@ -455,10 +460,11 @@ pub(crate) fn count_steps(path: &Path, file: &File) -> Result<usize, IoError> {
     Ok(count)
 }
 
-/// A step group's metadata, checked against its checksum.
-pub(crate) struct StepMeta {
+/// A step group's metadata, checked against its checksum, with the handle
+/// `G` of its group in the file (one per backend).
+pub(crate) struct StepMeta<G = hdf5_pure::Group> {
     pub(crate) gname: String,
-    pub(crate) group: hdf5_pure::Group,
+    pub(crate) group: G,
     pub(crate) step: u64,
     pub(crate) time: f64,
     pub(crate) dt: f64,
@@ -468,7 +474,7 @@ pub(crate) struct StepMeta {
     pub(crate) attrs: Vec<(String, Attr)>,
 }
 
-impl StepMeta {
+impl<G> StepMeta<G> {
     /// The fields `select` names with their types (all for
     /// [`Selection::All`]); a name the step lacks is an error.
     pub(crate) fn wanted(
@@ -519,7 +525,18 @@ pub(crate) fn read_meta(path: &Path, file: &File, k: usize) -> Result<StepMeta, 
         });
     }
     let g = guard(path, Some(&gname), None, || file.group(&gname))?;
-    let mut attrs: HashMap<String, AttrValue> = guard(path, Some(&gname), None, || g.attrs())?;
+    let attrs: HashMap<String, AttrValue> = guard(path, Some(&gname), None, || g.attrs())?;
+    parse_meta(path, gname, g, attrs)
+}
+
+/// Decodes the attributes `attrs` of step group `gname` (handle `group`) and
+/// checks them against the metadata checksum.
+pub(crate) fn parse_meta<G>(
+    path: &Path,
+    gname: String,
+    group: G,
+    mut attrs: HashMap<String, AttrValue>,
+) -> Result<StepMeta<G>, IoError> {
     let bad = |attr: &str, what: &str| IoError::BadAttribute {
         path: path.to_owned(),
         step: gname.clone(),
@@ -607,7 +624,7 @@ pub(crate) fn read_meta(path: &Path, file: &File, k: usize) -> Result<StepMeta, 
     let table = table.into_iter().map(|(n, t)| (n.to_owned(), t)).collect();
     Ok(StepMeta {
         gname,
-        group: g,
+        group,
         step,
         time,
         dt,
