@@ -14,6 +14,7 @@ use crate::output::progress::ProgressReporter;
 use crate::output::snapshot::{self as snapfile, Schedule};
 use crate::output::timings::{StageTotals, TimingsCsv};
 use crate::output::{particles, profile, summary};
+use crate::watch::{self, Watch, WatchSummary};
 use crate::{checkpoint, AppError};
 use serde::Serialize;
 use sph_comm::{Communicator, ReduceOp, SerialComm};
@@ -114,6 +115,9 @@ pub struct Summary {
     /// for).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub io: Option<IoSummary>,
+    /// The run's watch of its conserved quantities: bounds, and the first
+    /// step past each (see [`crate::watch`]).
+    pub watch: WatchSummary,
 }
 
 /// The snapshot and checkpoint files of a run.
@@ -214,6 +218,7 @@ pub struct Simulation<C: Communicator = SerialComm> {
     write_particles: bool,
     outputs: Outputs,
     resumed_at: Option<u64>,
+    watch: Option<Watch>,
 }
 
 impl Simulation {
@@ -297,6 +302,7 @@ impl<C: Communicator> Simulation<C> {
             write_particles: false,
             outputs: Outputs::default(),
             resumed_at: resume.map(|s| s.step),
+            watch: Some(Watch::default()),
         })
     }
 
@@ -355,6 +361,12 @@ impl<C: Communicator> Simulation<C> {
         self.write_particles = on;
     }
 
+    /// How the run watches its conserved quantities (default:
+    /// [`Watch::default`], warnings only); `None` turns the watch off.
+    pub fn set_watch(&mut self, watch: Option<Watch>) {
+        self.watch = watch;
+    }
+
     /// Runs until `stop`, writing outputs into `out` (created if needed, by
     /// rank 0, which writes every file). Collective: every rank calls it.
     pub fn run(&mut self, stop: Stop, out: &Path, progress: Progress) -> Result<Summary, AppError> {
@@ -389,6 +401,10 @@ impl<C: Communicator> Simulation<C> {
                 std::fs::create_dir_all(dir).map_err(|e| AppError::io(dir, e))?;
             }
         }
+        if let Some(w) = self.watch.as_mut() {
+            let all = 0..self.scene.particles.len();
+            w.check_initial(&self.scene.particles, all, self.hydro.domain().comm(), root)?;
+        }
         loop {
             let t = self.hydro.time();
             let steps = self.hydro.steps();
@@ -400,9 +416,13 @@ impl<C: Communicator> Simulation<C> {
             if let Stop::Time(te) = stop {
                 self.hydro.limit_next_dt(te - t);
             }
-            let r = self
+            let r = match self
                 .hydro
-                .step(&mut self.scene.particles, &mut self.scene.bbox)?;
+                .step(&mut self.scene.particles, &mut self.scene.bbox)
+            {
+                Ok(r) => r,
+                Err(e) => return Err(watch::locate(e, &self.scene.particles, self.hydro.owned())),
+            };
             first.get_or_insert(r.conserved);
             energies.push(r.t, &r.conserved);
             totals.record(&r);
@@ -410,6 +430,19 @@ impl<C: Communicator> Simulation<C> {
             if let Some((conserved, timings)) = logs.as_mut() {
                 conserved.step(&r, n)?;
                 timings.step(&r, &totals)?;
+            }
+            if let Some(w) = self.watch.as_mut() {
+                let checked = w.check_step(
+                    &r,
+                    &self.scene.particles,
+                    self.hydro.owned(),
+                    self.hydro.domain().comm(),
+                    root,
+                );
+                if checked.is_err() {
+                    bar.finish();
+                }
+                checked?;
             }
             bar.update(&r, self.hydro.time());
             neighbors_total = Some(r.neighbors.total);
@@ -488,6 +521,10 @@ impl<C: Communicator> Simulation<C> {
             domain: totals.domain(),
             energies: energies.checks(self.scene.energies.unwrap_or(&[]), end.t),
             io: files.any().then_some(files.summary),
+            watch: self
+                .watch
+                .as_ref()
+                .map_or_else(WatchSummary::default, Watch::summary),
         };
 
         // Rank 0's files; an error is returned after the collectives below,

@@ -9,6 +9,7 @@ use sph_apps::cases::{self, Scheme, SchemeOverrides};
 use sph_apps::checkpoint;
 use sph_apps::output::snapshot::{self as snapfile, Schedule};
 use sph_apps::simulation::{CheckpointEvery, Outputs, Progress, Stop};
+use sph_apps::watch::{Bounds, Watch};
 use sph_apps::{AppError, Simulation};
 use sph_comm::Communicator;
 use sph_core::PRESETS;
@@ -160,6 +161,23 @@ struct RunArgs {
     /// No progress output.
     #[arg(short, long)]
     quiet: bool,
+    /// Stop with an error at the first conserved quantity past its bound
+    /// (--max-energy-drift, --max-momentum-drift, total mass exact, every
+    /// particle mass > 0), naming the quantity, the step and the particle
+    /// to blame. Without it the run warns once per quantity and records
+    /// the step in summary.json.
+    #[arg(long)]
+    strict: bool,
+    /// Bound of the relative total-energy drift |E - E0| / |E0| checked
+    /// after every step, a number >= 0.
+    #[arg(long, value_name = "X", default_value_t = 1e-2, allow_negative_numbers = true,
+          value_parser = parse_non_negative)]
+    max_energy_drift: f64,
+    /// Bound of the momentum drift |p - p0| relative to the momentum scale
+    /// (the largest sqrt(2 M E_kin) so far), a number >= 0.
+    #[arg(long, value_name = "X", default_value_t = 1e-10, allow_negative_numbers = true,
+          value_parser = parse_non_negative)]
+    max_momentum_drift: f64,
     /// Fields of the snapshots, comma-separated (default:
     /// x,y,z,vx,vy,vz,h,m,u,rho,p,id). Snapshots are written when a
     /// --snapshot-every-steps, --snapshot-every-time or --snapshot-at
@@ -464,6 +482,30 @@ fn scheme_options(s: &Scheme, softening: Option<f64>) -> String {
     text
 }
 
+/// Checks the scheme the run will use (the case's with the command line's
+/// overrides) before the solver sees it, in the options' terms.
+fn check_scheme(s: &Scheme, a: &RunArgs, case: &str) -> Result<(), AppError> {
+    if let Some(sw) = s.switches() {
+        if s.alpha() < sw.alpha_min || s.alpha().is_nan() {
+            let origin = match (a.alpha, a.av_switches, &a.scheme) {
+                (Some(_), Some(_), _) => "--av-switches on",
+                (Some(_), None, Some(_)) => "the scheme given by --scheme",
+                (Some(_), None, None) => "the scheme of case '{case}'",
+                _ => "the scheme",
+            }
+            .replace("{case}", case);
+            return Err(AppError::Usage(format!(
+                "--alpha {}: with viscosity switches on ({origin}), --alpha is the largest viscosity and must be at least the switches' floor {}; give --alpha >= {}, or --av-switches off for one constant alpha (any value >= 0)",
+                s.alpha(),
+                sw.alpha_min,
+                sw.alpha_min
+            )));
+        }
+    }
+    s.validate()
+        .map_err(|e| AppError::Usage(format!("scheme options: {e}")))
+}
+
 /// What the command line changes in the case's scheme.
 fn scheme_overrides(a: &RunArgs) -> Result<SchemeOverrides, AppError> {
     let preset = match &a.scheme {
@@ -751,6 +793,16 @@ fn resolved_config(
     }
     set("write-particles", Value::Boolean(a.write_particles));
     set("quiet", Value::Boolean(a.quiet));
+    // The watch's options only when set: plain runs keep their config.toml.
+    if a.strict {
+        set("strict", Value::Boolean(true));
+    }
+    if a.max_energy_drift != 1e-2 {
+        set("max-energy-drift", Value::Float(a.max_energy_drift));
+    }
+    if a.max_momentum_drift != 1e-10 {
+        set("max-momentum-drift", Value::Float(a.max_momentum_drift));
+    }
     if let Some(f) = &a.snapshot_fields {
         set("snapshot-fields", Value::String(f.0.join(",")));
     }
@@ -1011,7 +1063,9 @@ fn run(a: RunArgs) -> Result<(), AppError> {
     // The case applies its own scheme with what the command line
     // overrides; each rank builds only its share of the particles.
     let share = cases::Share { rank, ranks };
-    let mut scene = case.setup_share(side, config, &scheme_overrides(&a)?, share)?;
+    let overrides = scheme_overrides(&a)?;
+    check_scheme(&overrides.over(case.default_scheme()), &a, case.name())?;
+    let mut scene = case.setup_share(side, config, &overrides, share)?;
     scene.config.scheme.validate()?;
     let switches = scene.config.scheme.switches().is_some();
     // A checkpoint, or a snapshot as initial conditions, replaces the
@@ -1072,6 +1126,13 @@ fn run(a: RunArgs) -> Result<(), AppError> {
     };
     let result = sim.and_then(|mut sim| {
         sim.set_write_particles(a.write_particles);
+        sim.set_watch(Some(Watch::new(
+            Bounds {
+                energy: a.max_energy_drift,
+                momentum: a.max_momentum_drift,
+            },
+            a.strict,
+        )));
         sim.set_outputs(outputs)?;
         sim.run(stop, &out, progress)
     });
