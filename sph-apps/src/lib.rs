@@ -23,6 +23,7 @@
 //! ```
 
 pub mod analysis;
+pub mod bench;
 pub mod cases;
 pub mod checkpoint;
 pub mod memory;

@@ -26,8 +26,11 @@ use std::ops::Range;
 pub struct Bounds {
     /// Largest relative total-energy drift `|E - E_0| / |E_0|`.
     pub energy: f64,
-    /// Largest momentum drift `|p - p_0|` relative to the momentum scale
-    /// `max over steps of sqrt(2 M E_kin)` (an upper bound of `sum m |v|`).
+    /// Largest momentum drift `|p - p_0|` relative to the momentum scale,
+    /// the largest `sqrt(2 M (E_kin + |E_int|))` so far: at least
+    /// `sum m |v|`, and `M` times a thermal speed, so that a fluid at rest
+    /// (whose velocities are themselves round-off) is measured against its
+    /// sound speed.
     pub momentum: f64,
 }
 
@@ -282,7 +285,7 @@ impl Watch {
         let first = *self.first.get_or_insert(c);
         self.momentum_scale = self
             .momentum_scale
-            .max((2.0 * c.mass * c.e_kin).max(0.0).sqrt());
+            .max((2.0 * c.mass * (c.e_kin + c.e_int.abs())).max(0.0).sqrt());
         if c.mass.to_bits() != first.mass.to_bits() && !self.seen("mass") {
             let v = Violation {
                 step: r.step,

@@ -37,6 +37,65 @@ enum Command {
     Run(Box<RunArgs>),
     /// List the test cases with their default size, end time and scheme.
     Cases,
+    /// Error against run time: run every combination of case, size,
+    /// scheme, kernel and repeat as a fresh `sphexa run` process to the
+    /// case's end time, and write bench.csv, bench.json (with the spread
+    /// over repeats and the fitted convergence orders) and
+    /// error_vs_time.png into --out.
+    Bench(Box<BenchArgs>),
+}
+
+#[derive(Args, Debug)]
+struct BenchArgs {
+    /// Test cases (each needs a reference solution for its L1 errors).
+    #[arg(required = true, value_parser = case_names())]
+    cases: Vec<String>,
+    /// Particles per side, comma-separated (e.g. 20,30,40), each 4 to 1000.
+    #[arg(long, value_name = "N1,N2,...", required = true, value_delimiter = ',',
+          value_parser = parse_side)]
+    sizes: Vec<usize>,
+    /// Scheme presets, comma-separated (`sphexa cases` lists them); `case`
+    /// is each case's own scheme.
+    #[arg(
+        long,
+        value_name = "S1,S2,...",
+        default_value = "case",
+        value_delimiter = ','
+    )]
+    schemes: Vec<String>,
+    /// Kernels, comma-separated (as `sphexa run --kernel`).
+    #[arg(long, value_name = "K1,K2,...", default_value = "sinc:6", value_delimiter = ',',
+          value_parser = parse_kernel)]
+    kernels: Vec<KernelChoice>,
+    /// Worker threads per rank of each run (default: all cores).
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = parse_threads)]
+    threads: Option<usize>,
+    /// MPI ranks, comma-separated: a run on R > 1 ranks is started as
+    /// `mpirun -n R sphexa run ...` (needs a `--features mpi` build).
+    #[arg(long, value_name = "R1,R2,...", default_value = "1", value_delimiter = ',',
+          value_parser = parse_threads)]
+    ranks: Vec<usize>,
+    /// Runs of each combination (their spread, min and median, is in
+    /// bench.json), at least 1.
+    #[arg(long, value_name = "R", default_value_t = 1, allow_negative_numbers = true,
+          value_parser = parse_steps)]
+    repeat: u64,
+    /// Simulated time of every run (default: each case's end time).
+    #[arg(long = "end-time", value_name = "T", allow_negative_numbers = true,
+          value_parser = parse_positive)]
+    end_time: Option<f64>,
+    /// Output folder (default out/bench); each run's own outputs go to
+    /// runs/ inside it.
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Another code's points to draw over the plot: a CSV with bench.csv's
+    /// columns (at least N, wall_s and l1_rho / l1_p / l1_v; case, scheme
+    /// and kernel name its series).
+    #[arg(long, value_name = "FILE")]
+    reference: Option<PathBuf>,
+    /// No line per run.
+    #[arg(short, long)]
+    quiet: bool,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
@@ -174,7 +233,7 @@ struct RunArgs {
           value_parser = parse_non_negative)]
     max_energy_drift: f64,
     /// Bound of the momentum drift |p - p0| relative to the momentum scale
-    /// (the largest sqrt(2 M E_kin) so far), a number >= 0.
+    /// (the largest sqrt(2 M (E_kin + |E_int|)) so far: M times the rms of speed and thermal speed), a number >= 0.
     #[arg(long, value_name = "X", default_value_t = 1e-10, allow_negative_numbers = true,
           value_parser = parse_non_negative)]
     max_momentum_drift: f64,
@@ -416,6 +475,13 @@ fn main() -> ExitCode {
             list_cases();
             ExitCode::SUCCESS
         }
+        Command::Bench(args) => match bench(*args) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::FAILURE
+            }
+        },
         Command::Run(args) => match layered(
             *args,
             matches.subcommand_matches("run").expect("run was parsed"),
@@ -429,6 +495,141 @@ fn main() -> ExitCode {
             }
         },
     }
+}
+
+/// `sphexa bench`: every combination as a child process, then the report.
+fn bench(a: BenchArgs) -> Result<(), AppError> {
+    use sph_apps::bench::{read_csv, Report, Row};
+    for name in &a.schemes {
+        if name != "case" {
+            Scheme::preset(name).map_err(|_| {
+                let names: Vec<&str> = PRESETS.iter().map(|p| p.0).collect();
+                AppError::Usage(format!(
+                    "--schemes: unknown scheme '{name}'; allowed: case (each case's own), {}",
+                    names.join(", ")
+                ))
+            })?;
+        }
+    }
+    let reference = match &a.reference {
+        Some(path) => Some((path.clone(), read_csv(path)?)),
+        None => None,
+    };
+    let out = a.out.clone().unwrap_or_else(|| PathBuf::from("out/bench"));
+    let exe = std::env::current_exe()
+        .map_err(|e| AppError::Usage(format!("cannot find the sphexa binary to run: {e}")))?;
+    let total = a.cases.len()
+        * a.sizes.len()
+        * a.schemes.len()
+        * a.kernels.len()
+        * a.ranks.len()
+        * a.repeat as usize;
+    let mut rows = Vec::new();
+    let mut k = 0;
+    for case in &a.cases {
+        for &side in &a.sizes {
+            for scheme in &a.schemes {
+                for kernel in &a.kernels {
+                    for &ranks in &a.ranks {
+                        for repeat in 0..a.repeat {
+                            k += 1;
+                            let kernel_text = kernel.to_string();
+                            let dir = out.join("runs").join(format!(
+                                "{case}_{scheme}_{}_{side}_r{ranks}_{repeat}",
+                                kernel_text.replace(':', "")
+                            ));
+                            let mut cmd = if ranks > 1 {
+                                let mut c = std::process::Command::new("mpirun");
+                                c.arg("-n").arg(ranks.to_string()).arg(&exe);
+                                c
+                            } else {
+                                std::process::Command::new(&exe)
+                            };
+                            cmd.args(["run", case, "-n", &side.to_string(), "-q"])
+                                .args(["--kernel", &kernel_text])
+                                .arg("--out")
+                                .arg(&dir);
+                            if scheme != "case" {
+                                cmd.args(["--scheme", scheme]);
+                            }
+                            if let Some(t) = a.threads {
+                                cmd.args(["--threads", &t.to_string()]);
+                            }
+                            if let Some(t) = a.end_time {
+                                cmd.args(["--end-time", &t.to_string()]);
+                            }
+                            let what = format!(
+                                "{case} --scheme {scheme} --kernel {kernel_text} -n {side} on {ranks} rank(s), repeat {repeat}"
+                            );
+                            let o = cmd.output().map_err(|e| {
+                                AppError::Usage(format!("{what}: could not start: {e}"))
+                            })?;
+                            if !o.status.success() {
+                                let err = String::from_utf8_lossy(&o.stderr);
+                                return Err(AppError::Usage(format!(
+                                    "{what} failed ({}): {}",
+                                    o.status,
+                                    err.trim()
+                                )));
+                            }
+                            let path = dir.join("summary.json");
+                            let text = std::fs::read_to_string(&path)
+                                .map_err(|e| AppError::io(&path, e))?;
+                            let json: serde_json::Value = serde_json::from_str(&text)
+                                .map_err(|e| AppError::Usage(format!("{}: {e}", path.display())))?;
+                            let row = Row::from_summary(&json, scheme, side as u64, repeat, &path)?;
+                            if !a.quiet {
+                                eprintln!(
+                                    "[{k}/{total}] {what}: {} particles, {} steps, {:.2} s, L1 rho {:.4e} P {:.4e} |v| {:.4e}, peak RSS {:.0} MB",
+                                    row.n, row.steps, row.wall_s, row.l1_rho, row.l1_p, row.l1_v,
+                                    row.peak_rss_bytes as f64 / 1e6
+                                );
+                            }
+                            rows.push(row);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let report = Report::new(rows, reference);
+    let title = format!("L1 against wall time: {}", a.cases.join(", "));
+    report.write(&out, &title)?;
+    println!(
+        "{:<28} {:>9} {:>6} {:>10} {:>10} {:>10} {:>10} {:>9}",
+        "series", "N", "steps", "wall_s", "L1 rho", "L1 P", "L1 |v|", "RSS MB"
+    );
+    for sp in &report.spread {
+        let r = report
+            .runs
+            .iter()
+            .find(|r| r.series() == sp.series && r.n == sp.n)
+            .expect("a spread has runs");
+        println!(
+            "{:<28} {:>9} {:>6} {:>10.3} {:>10.4e} {:>10.4e} {:>10.4e} {:>9.0}",
+            sp.series,
+            sp.n,
+            r.steps,
+            sp.wall_s_median,
+            r.l1_rho,
+            r.l1_p,
+            r.l1_v,
+            sp.peak_rss_bytes_median as f64 / 1e6
+        );
+    }
+    for o in &report.orders {
+        println!(
+            "order {:<28} {:<7} {:.3} (sizes {:?})",
+            o.series, o.field, o.order, o.sizes
+        );
+    }
+    println!(
+        "wrote {}, {}, {}",
+        out.join("bench.csv").display(),
+        out.join("bench.json").display(),
+        out.join("error_vs_time.png").display()
+    );
+    Ok(())
 }
 
 /// `sphexa cases`: one line per case, then its default scheme as the
