@@ -31,6 +31,7 @@ pub mod output;
 pub mod plot;
 pub mod reference;
 pub mod simulation;
+pub mod stress;
 pub mod watch;
 
 pub use simulation::{Simulation, Summary};

@@ -43,6 +43,25 @@ enum Command {
     /// over repeats and the fitted convergence orders) and
     /// error_vs_time.png into --out.
     Bench(Box<BenchArgs>),
+    /// Runs built to break the solver (noisy lattices, Courant sweeps, a
+    /// strong shock tube, extreme kernels and neighbour counts, a 100x
+    /// spread of smoothing lengths, a long run at rest, extreme inputs):
+    /// each pass or fail with its figures, in OUT/stress.json and a table.
+    /// Exits non-zero when a scenario fails.
+    Stress(StressArgs),
+}
+
+#[derive(Args, Debug)]
+struct StressArgs {
+    /// The short suite (CI: under 5 minutes on 2 cores).
+    #[arg(long)]
+    quick: bool,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = parse_threads)]
+    threads: Option<usize>,
+    /// Output folder (default out/stress): stress.json and each run's files.
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]
@@ -475,6 +494,14 @@ fn main() -> ExitCode {
             list_cases();
             ExitCode::SUCCESS
         }
+        Command::Stress(args) => match stress(args) {
+            Ok(true) => ExitCode::SUCCESS,
+            Ok(false) => ExitCode::FAILURE,
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::FAILURE
+            }
+        },
         Command::Bench(args) => match bench(*args) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
@@ -495,6 +522,31 @@ fn main() -> ExitCode {
             }
         },
     }
+}
+
+/// `sphexa stress`: the suite, its table, and whether every scenario passed.
+fn stress(a: StressArgs) -> Result<bool, AppError> {
+    if let Some(t) = a.threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build_global()
+            .map_err(|e| AppError::Usage(format!("cannot start {t} threads: {e}")))?;
+    }
+    let out = a.out.unwrap_or_else(|| PathBuf::from("out/stress"));
+    let outcomes = sph_apps::stress::run_suite(&sph_apps::stress::Options {
+        quick: a.quick,
+        out: out.clone(),
+        verbose: true,
+    })?;
+    print!("{}", sph_apps::stress::table(&outcomes));
+    let failed = outcomes.iter().filter(|o| !o.pass).count();
+    println!(
+        "{} of {} passed; {}",
+        outcomes.len() - failed,
+        outcomes.len(),
+        out.join("stress.json").display()
+    );
+    Ok(failed == 0)
 }
 
 /// `sphexa bench`: every combination as a child process, then the report.
