@@ -371,6 +371,65 @@ fn clump(o: &Options) -> Result<Outcome, AppError> {
     Ok(judge(&name, &what, r, wall))
 }
 
+/// A Mach 10 blob (the wind-shock set-up at a higher Mach number): a
+/// cloud of radius 0.1 and density 10 at rest in a periodic unit box of
+/// gas at density 1 streaming along x at 10 times its sound speed, in
+/// pressure balance (P = 1); equal particle masses, the cloud's lattice
+/// 10^(1/3) times finer.
+fn mach10_blob(o: &Options) -> Result<Outcome, AppError> {
+    // The wind crosses the cloud's radius in 0.0077 and the box in 0.077.
+    let (side, t_end) = if o.quick { (12, 0.02) } else { (20, 0.08) };
+    let base = uniform_box(side, 1.0, config(100, 150, 0.2))?;
+    let radius = 0.1;
+    let gamma = 5.0f64 / 3.0;
+    let c = (gamma * 1.0 / 1.0).sqrt();
+    let wind = 10.0 * c;
+    let bp = &base.particles;
+    let outside: Vec<usize> = (0..bp.len())
+        .filter(|&i| (bp.x[i].powi(2) + bp.y[i].powi(2) + bp.z[i].powi(2)).sqrt() >= radius)
+        .collect();
+    let dx = 1.0 / side as f64;
+    let dc = dx / 10f64.cbrt();
+    let k = (2.0 * radius / dc).ceil() as usize + 1;
+    let cloud: Vec<[f64; 3]> = (0..k * k * k)
+        .map(|c| [c % k, c / k % k, c / (k * k)].map(|a| (a as f64 - 0.5 * (k as f64 - 1.0)) * dc))
+        .filter(|q| (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt() < radius)
+        .collect();
+    let n = outside.len() + cloud.len();
+    let mut p = sph_core::Particles::new(n, bp.fields());
+    let (m, u_bg, h_bg) = (bp.m[0], bp.u[0], bp.h[0]);
+    for (k, &i) in outside.iter().enumerate() {
+        (p.x[k], p.y[k], p.z[k]) = (bp.x[i], bp.y[i], bp.z[i]);
+        p.vx[k] = wind;
+        (p.m[k], p.h[k], p.u[k]) = (m, h_bg, u_bg);
+    }
+    for (k, q) in cloud.iter().enumerate() {
+        let i = outside.len() + k;
+        (p.x[i], p.y[i], p.z[i]) = (q[0], q[1], q[2]);
+        (p.m[i], p.h[i], p.u[i]) = (m, h_bg * dc / dx, u_bg / 10.0);
+    }
+    for i in 0..n {
+        p.id[i] = i as u64;
+    }
+    let s = Scene {
+        case: "mach10-blob",
+        total: n,
+        particles: p,
+        ..base
+    };
+    let name = "mach10-blob".to_string();
+    let (r, wall) = run(
+        s,
+        KernelChoice::default(),
+        Stop::Time(t_end),
+        &o.out.join(&name),
+    );
+    let what = format!(
+        "cloud r = 0.1, rho 10 at rest in a {side}^3 periodic wind, rho 1, P 1, v_x = 10 c = {wind:.2}; {n} particles, to t = {t_end}"
+    );
+    Ok(judge(&name, &what, r, wall))
+}
+
 /// A small periodic box at rest for many steps: energy and momentum drift.
 fn at_rest(o: &Options) -> Result<Outcome, AppError> {
     let (side, steps) = if o.quick { (8, 2000) } else { (8, 10_000) };
@@ -500,6 +559,7 @@ pub fn run_suite(o: &Options) -> Result<Vec<Outcome>, AppError> {
             jobs.push(Box::new(move || courant(o, case, k)));
         }
     }
+    jobs.push(Box::new(|| mach10_blob(o)));
     jobs.push(Box::new(|| strong_sod(o)));
     jobs.push(Box::new(|| kernel_case(o, "sinc:10", 100)));
     jobs.push(Box::new(|| kernel_case(o, "sinc:6", 50)));
