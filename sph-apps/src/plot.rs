@@ -379,6 +379,43 @@ fn bench_lines(rows: &[crate::bench::Row], field: &str) -> Vec<BenchLine> {
         .collect()
 }
 
+/// A tick label of a log axis: three significant digits, no trailing
+/// zeros.
+fn log_tick(v: f64) -> String {
+    if v <= 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let digits = (2 - v.log10().floor() as i32).clamp(0, 8) as usize;
+    let text = format!("{v:.digits$}");
+    if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        text
+    }
+}
+
+/// Ticks of a log axis from `lo` to `hi`: 1, 2 and 5 times the powers of
+/// ten (and 3 when the axis spans less than a decade and a half).
+fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let mantissas: &[f64] = if hi / lo < 30.0 {
+        &[1.0, 1.5, 2.0, 3.0, 5.0, 7.0]
+    } else {
+        &[1.0, 2.0, 5.0]
+    };
+    let mut ticks = Vec::new();
+    let mut decade = 10f64.powf(lo.log10().floor());
+    while decade <= hi {
+        for m in mantissas {
+            let v = m * decade;
+            if v >= lo && v <= hi {
+                ticks.push(v);
+            }
+        }
+        decade *= 10.0;
+    }
+    ticks
+}
+
 /// A log axis range around `values` (a factor 1.25 on each side).
 fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     let (lo, hi) = values
@@ -413,15 +450,23 @@ fn render_bench(
             .margin_right(16)
             .x_label_area_size(44)
             .y_label_area_size(70)
-            .build_cartesian_2d((x_lo..x_hi).log_scale(), (y_lo..y_hi).log_scale())?;
+            .build_cartesian_2d(
+                (x_lo..x_hi)
+                    .log_scale()
+                    .with_key_points(log_ticks(x_lo, x_hi)),
+                (y_lo..y_hi)
+                    .log_scale()
+                    .with_key_points(log_ticks(y_lo, y_hi)),
+            )?;
         chart
             .configure_mesh()
             .x_desc("wall time (s)")
             .y_desc(*label)
-            .x_label_formatter(&|v| format!("{v:.3}"))
-            .y_label_formatter(&|v| format!("{v:.3}"))
+            .x_label_formatter(&|v| log_tick(*v))
+            .y_label_formatter(&|v| log_tick(*v))
             .label_style((FAMILY, 15))
             .axis_desc_style((FAMILY, 18))
+            .max_light_lines(1)
             .light_line_style(RGBColor(235, 235, 235))
             .draw()?;
         let mut any = false;

@@ -67,12 +67,16 @@ struct StressArgs {
 #[derive(Args, Debug)]
 struct BenchArgs {
     /// Test cases (each needs a reference solution for its L1 errors).
-    #[arg(required = true, value_parser = case_names())]
+    #[arg(required_unless_present = "from", value_parser = case_names())]
     cases: Vec<String>,
     /// Particles per side, comma-separated (e.g. 20,30,40), each 4 to 1000.
-    #[arg(long, value_name = "N1,N2,...", required = true, value_delimiter = ',',
-          value_parser = parse_side)]
+    #[arg(long, value_name = "N1,N2,...", required_unless_present = "from",
+          value_delimiter = ',', value_parser = parse_side)]
     sizes: Vec<usize>,
+    /// Run nothing: read the rows of an earlier bench.csv and write the
+    /// report (JSON, CSV, plot) again, e.g. with another --reference.
+    #[arg(long, value_name = "BENCH_CSV", conflicts_with_all = ["cases", "sizes"])]
+    from: Option<PathBuf>,
     /// Scheme presets, comma-separated (`sphexa cases` lists them); `case`
     /// is each case's own scheme.
     #[arg(
@@ -576,7 +580,10 @@ fn bench(a: BenchArgs) -> Result<(), AppError> {
         * a.kernels.len()
         * a.ranks.len()
         * a.repeat as usize;
-    let mut rows = Vec::new();
+    let mut rows = match &a.from {
+        Some(path) => read_csv(path)?,
+        None => Vec::new(),
+    };
     let mut k = 0;
     for case in &a.cases {
         for &side in &a.sizes {
@@ -644,8 +651,10 @@ fn bench(a: BenchArgs) -> Result<(), AppError> {
             }
         }
     }
+    let mut names: Vec<String> = rows.iter().map(|r| r.case.clone()).collect();
+    names.dedup();
     let report = Report::new(rows, reference);
-    let title = format!("L1 against wall time: {}", a.cases.join(", "));
+    let title = format!("L1 against wall time: {}", names.join(", "));
     report.write(&out, &title)?;
     println!(
         "{:<28} {:>9} {:>6} {:>10} {:>10} {:>10} {:>10} {:>9}",
