@@ -403,7 +403,9 @@ impl<C: Communicator> Simulation<C> {
         }
         if let Some(w) = self.watch.as_mut() {
             let all = 0..self.scene.particles.len();
-            w.check_initial(&self.scene.particles, all, self.hydro.domain().comm(), root)?;
+            let reads_u = self.scene.config.eos.uses_internal_energy();
+            let comm = self.hydro.domain().comm();
+            w.check_initial(&self.scene.particles, all, comm, root, reads_u)?;
         }
         loop {
             let t = self.hydro.time();

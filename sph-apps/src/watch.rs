@@ -166,6 +166,8 @@ impl Watch {
     }
 
     /// Checks the initial particles (`owned` of `p`). Collective.
+    /// `internal_energy`: the equation of state reads u (a negative u is
+    /// refused only then; e.g. the Tait EOS ignores it).
     ///
     /// # Errors
     /// A non-finite value or a smoothing length <= 0 or a negative internal
@@ -177,6 +179,7 @@ impl Watch {
         owned: Range<usize>,
         comm: &C,
         root: bool,
+        internal_energy: bool,
     ) -> Result<(), AppError> {
         let bad_value = |i: usize| -> Option<String> {
             let fields = [
@@ -196,7 +199,7 @@ impl Watch {
             if p.h[i] <= 0.0 {
                 return Some(format!("h = {:e} (allowed: h > 0)", p.h[i]));
             }
-            if p.u[i] < 0.0 {
+            if internal_energy && p.u[i] < 0.0 {
                 return Some(format!("u = {:e} (allowed: u >= 0)", p.u[i]));
             }
             None
@@ -511,7 +514,7 @@ mod tests {
         p.u[3] = -1.0;
         let mut w = Watch::default();
         let e = w
-            .check_initial(&p, 0..4, &SerialComm::new(), false)
+            .check_initial(&p, 0..4, &SerialComm::new(), false, true)
             .unwrap_err()
             .to_string();
         assert!(e.contains("id 11") && e.contains("u >= 0"), "{e}");
