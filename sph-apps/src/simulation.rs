@@ -288,6 +288,7 @@ impl<C: Communicator> Simulation<C> {
             )));
         }
         let (t0, dt0) = resume.map_or((0.0, scene.dt0), |s| (s.t, s.dt_prev));
+        let scene_gravity = scene.config.gravity.is_some();
         let mut hydro =
             Hydro::with_comm(kernel, scene.config, t0, dt0, comm, DomainConfig::default())?;
         match resume {
@@ -302,7 +303,7 @@ impl<C: Communicator> Simulation<C> {
             write_particles: false,
             outputs: Outputs::default(),
             resumed_at: resume.map(|s| s.step),
-            watch: Some(Watch::default()),
+            watch: Some(Watch::new(watch::Bounds::for_run(scene_gravity), false)),
         })
     }
 
@@ -361,8 +362,9 @@ impl<C: Communicator> Simulation<C> {
         self.write_particles = on;
     }
 
-    /// How the run watches its conserved quantities (default:
-    /// [`Watch::default`], warnings only); `None` turns the watch off.
+    /// How the run watches its conserved quantities (default: the bounds
+    /// of [`watch::Bounds::for_run`], warnings only); `None` turns the
+    /// watch off.
     pub fn set_watch(&mut self, watch: Option<Watch>) {
         self.watch = watch;
     }

@@ -34,6 +34,23 @@ pub struct Bounds {
     pub momentum: f64,
 }
 
+/// The default momentum bound of runs with self-gravity: the tree's
+/// multipole forces are not pairwise antisymmetric, so momentum is
+/// conserved to the tree's accuracy (measured: Evrard at 912 particles,
+/// 1.8e-9 after 2 steps and 5.3e-6 after 150), not to round-off.
+pub const GRAVITY_MOMENTUM_BOUND: f64 = 1e-4;
+
+impl Bounds {
+    /// The default bounds of a run with (`gravity`) or without self-gravity.
+    pub fn for_run(gravity: bool) -> Bounds {
+        let mut b = Bounds::default();
+        if gravity {
+            b.momentum = GRAVITY_MOMENTUM_BOUND;
+        }
+        b
+    }
+}
+
 impl Default for Bounds {
     fn default() -> Self {
         Bounds {

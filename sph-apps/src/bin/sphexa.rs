@@ -9,7 +9,7 @@ use sph_apps::cases::{self, Scheme, SchemeOverrides};
 use sph_apps::checkpoint;
 use sph_apps::output::snapshot::{self as snapfile, Schedule};
 use sph_apps::simulation::{CheckpointEvery, Outputs, Progress, Stop};
-use sph_apps::watch::{Bounds, Watch};
+use sph_apps::watch::{Bounds, Watch, GRAVITY_MOMENTUM_BOUND};
 use sph_apps::{AppError, Simulation};
 use sph_comm::Communicator;
 use sph_core::PRESETS;
@@ -145,6 +145,9 @@ enum CurveArg {
     Morton,
 }
 
+/// The default of --max-momentum-drift.
+const DEFAULT_MOMENTUM_BOUND: f64 = 1e-10;
+
 /// Most worker threads per rank.
 const MAX_THREADS: i64 = 1 << 16;
 
@@ -256,8 +259,11 @@ struct RunArgs {
           value_parser = parse_non_negative)]
     max_energy_drift: f64,
     /// Bound of the momentum drift |p - p0| relative to the momentum scale
-    /// (the largest sqrt(2 M (E_kin + |E_int|)) so far: M times the rms of speed and thermal speed), a number >= 0.
-    #[arg(long, value_name = "X", default_value_t = 1e-10, allow_negative_numbers = true,
+    /// (the largest sqrt(2 M (E_kin + |E_int|)) so far: M times the rms of
+    /// speed and thermal speed), a number >= 0. Left at its default 1e-10,
+    /// runs with self-gravity use 1e-4 (the tree's forces conserve momentum
+    /// only to its accuracy).
+    #[arg(long, value_name = "X", default_value_t = DEFAULT_MOMENTUM_BOUND, allow_negative_numbers = true,
           value_parser = parse_non_negative)]
     max_momentum_drift: f64,
     /// Fields of the snapshots, comma-separated (default:
@@ -1062,7 +1068,7 @@ fn resolved_config(
     if a.max_energy_drift != 1e-2 {
         set("max-energy-drift", Value::Float(a.max_energy_drift));
     }
-    if a.max_momentum_drift != 1e-10 {
+    if a.max_momentum_drift != DEFAULT_MOMENTUM_BOUND {
         set("max-momentum-drift", Value::Float(a.max_momentum_drift));
     }
     if let Some(f) = &a.snapshot_fields {
@@ -1368,6 +1374,7 @@ fn run(a: RunArgs) -> Result<(), AppError> {
         config_text,
         loaded.as_ref().map_or(f64::NEG_INFINITY, |l| l.state.t),
     )?;
+    let gravity = scene.config.gravity.is_some();
     let n = scene.total;
     if !a.quiet && root {
         eprintln!(
@@ -1388,10 +1395,16 @@ fn run(a: RunArgs) -> Result<(), AppError> {
     };
     let result = sim.and_then(|mut sim| {
         sim.set_write_particles(a.write_particles);
+        // Self-gravity's default momentum bound is the tree's accuracy.
+        let momentum = if a.max_momentum_drift == DEFAULT_MOMENTUM_BOUND && gravity {
+            GRAVITY_MOMENTUM_BOUND
+        } else {
+            a.max_momentum_drift
+        };
         sim.set_watch(Some(Watch::new(
             Bounds {
                 energy: a.max_energy_drift,
-                momentum: a.max_momentum_drift,
+                momentum,
             },
             a.strict,
         )));
