@@ -23,6 +23,7 @@
 //! ```
 
 pub mod analysis;
+pub mod bench;
 pub mod cases;
 pub mod checkpoint;
 pub mod memory;
@@ -30,6 +31,8 @@ pub mod output;
 pub mod plot;
 pub mod reference;
 pub mod simulation;
+pub mod stress;
+pub mod watch;
 
 pub use simulation::{Simulation, Summary};
 
@@ -67,6 +70,29 @@ pub enum AppError {
     /// A snapshot or checkpoint file could not be written or read.
     #[error(transparent)]
     Snapshot(#[from] sph_io::IoError),
+    /// A numerical failure of the solver, with the position of the
+    /// particle it names.
+    #[error("{source}; the particle is at ({:.6e}, {:.6e}, {:.6e})", position[0], position[1], position[2])]
+    Located {
+        /// The failure (names the step and the particle id).
+        source: sph_core::CoreError,
+        /// The particle's position when it failed.
+        position: [f64; 3],
+    },
+    /// A conserved quantity went non-finite.
+    #[error("step {step}: the conserved sums are not finite; first particle with a non-finite value: {}", particle.as_ref().map_or("none found".to_string(), |b| b.to_string()))]
+    NonFinite {
+        /// Step.
+        step: u64,
+        /// The particle of smallest id holding a non-finite value.
+        particle: Option<watch::Blame>,
+    },
+    /// A bad value in the initial particles.
+    #[error("initial state: {0}")]
+    Input(watch::Blame),
+    /// A strict run crossed a bound ([`watch::Watch`]).
+    #[error("{0} (--strict)")]
+    Watch(Box<watch::Violation>),
 }
 
 impl AppError {

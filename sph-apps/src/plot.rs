@@ -338,6 +338,224 @@ fn render_series(
     Ok(())
 }
 
+/// Line colours of the benchmark series, in turn.
+const SERIES_COLORS: [RGBColor; 8] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(23, 190, 207),
+];
+
+/// Writes `error_vs_time.png`: one panel per L1 field (side by side), L1
+/// against wall time on log-log axes; one line per series of `runs` (case,
+/// scheme, kernel; the median over repeats at each size, each point
+/// labelled with the side N^(1/3)) with its fitted order in the legend,
+/// and the points of `reference` (another code's, same columns) as hollow
+/// squares of their own colours.
+pub fn bench_png(
+    path: &Path,
+    title: &str,
+    runs: &[crate::bench::Row],
+    reference: &[crate::bench::Row],
+    orders: &[crate::bench::Order],
+) -> Result<(), AppError> {
+    render_bench(path, title, runs, reference, orders)
+        .map_err(|e| AppError::io(path, std::io::Error::other(e.to_string())))
+}
+
+/// (series, [(N, wall median, L1 median)]) of `rows` for `field`.
+type BenchLine = (String, Vec<(u64, f64, f64)>);
+
+fn bench_lines(rows: &[crate::bench::Row], field: &str) -> Vec<BenchLine> {
+    crate::bench::grouped(rows)
+        .into_iter()
+        .map(|(series, by_n)| {
+            let pts = by_n
+                .into_iter()
+                .map(|(n, rs)| {
+                    let mut w: Vec<f64> = rs.iter().map(|r| r.wall_s).collect();
+                    let mut l: Vec<f64> = rs.iter().map(|r| r.l1(field)).collect();
+                    (
+                        n,
+                        crate::bench::median(&mut w),
+                        crate::bench::median(&mut l),
+                    )
+                })
+                .filter(|p| p.1 > 0.0 && p.2 > 0.0 && p.1.is_finite() && p.2.is_finite())
+                .collect();
+            (series, pts)
+        })
+        .collect()
+}
+
+/// A tick label of a log axis: three significant digits, no trailing
+/// zeros.
+fn log_tick(v: f64) -> String {
+    if v <= 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let digits = (2 - v.log10().floor() as i32).clamp(0, 8) as usize;
+    let text = format!("{v:.digits$}");
+    if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        text
+    }
+}
+
+/// Ticks of a log axis from `lo` to `hi`: 1, 2 and 5 times the powers of
+/// ten (and 3 when the axis spans less than a decade and a half).
+fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    let mantissas: &[f64] = if hi / lo < 30.0 {
+        &[1.0, 1.5, 2.0, 3.0, 5.0, 7.0]
+    } else {
+        &[1.0, 2.0, 5.0]
+    };
+    let mut ticks = Vec::new();
+    let mut decade = 10f64.powf(lo.log10().floor());
+    while decade <= hi {
+        for m in mantissas {
+            let v = m * decade;
+            if v >= lo && v <= hi {
+                ticks.push(v);
+            }
+        }
+        decade *= 10.0;
+    }
+    ticks
+}
+
+/// A log axis range around `values` (a factor 1.25 on each side).
+fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) = values
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
+    if lo > hi {
+        return (0.1, 10.0);
+    }
+    (lo / 1.25, hi * 1.25)
+}
+
+fn render_bench(
+    path: &Path,
+    title: &str,
+    runs: &[crate::bench::Row],
+    reference: &[crate::bench::Row],
+    orders: &[crate::bench::Order],
+) -> Result<(), Box<dyn Error>> {
+    register_font()?;
+    let fields = crate::bench::L1_FIELDS;
+    let root = BitMapBackend::new(path, (600 * fields.len() as u32, 640)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let body = root.titled(title, (FAMILY, 26))?;
+    let all = || runs.iter().chain(reference);
+    let (x_lo, x_hi) = log_range(all().map(|r| r.wall_s));
+    for ((field, label), area) in fields.iter().zip(body.split_evenly((1, fields.len()))) {
+        let (y_lo, y_hi) = log_range(all().map(|r| r.l1(field)));
+        let mut chart = ChartBuilder::on(&area)
+            .margin(8)
+            .margin_right(16)
+            .x_label_area_size(44)
+            .y_label_area_size(70)
+            .build_cartesian_2d(
+                (x_lo..x_hi)
+                    .log_scale()
+                    .with_key_points(log_ticks(x_lo, x_hi)),
+                (y_lo..y_hi)
+                    .log_scale()
+                    .with_key_points(log_ticks(y_lo, y_hi)),
+            )?;
+        chart
+            .configure_mesh()
+            .x_desc("wall time (s)")
+            .y_desc(*label)
+            .x_label_formatter(&|v| log_tick(*v))
+            .y_label_formatter(&|v| log_tick(*v))
+            .label_style((FAMILY, 15))
+            .axis_desc_style((FAMILY, 18))
+            .max_light_lines(1)
+            .light_line_style(RGBColor(235, 235, 235))
+            .draw()?;
+        let mut any = false;
+        for (k, (series, pts)) in bench_lines(runs, field).into_iter().enumerate() {
+            if pts.is_empty() {
+                continue;
+            }
+            any = true;
+            let colour = SERIES_COLORS[k % SERIES_COLORS.len()];
+            let order = orders
+                .iter()
+                .find(|o| o.series == series && o.field == *field)
+                .map_or(String::new(), |o| format!(" (order {:.2})", o.order));
+            chart
+                .draw_series(LineSeries::new(
+                    pts.iter().map(|p| (p.1, p.2)),
+                    colour.stroke_width(2),
+                ))?
+                .label(format!("{series}{order}"))
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 24, y)], colour.stroke_width(2))
+                });
+            chart.draw_series(
+                pts.iter()
+                    .map(|p| Circle::new((p.1, p.2), 4, colour.filled())),
+            )?;
+            chart.draw_series(pts.iter().map(|p| {
+                EmptyElement::at((p.1, p.2))
+                    + Text::new(
+                        format!("{}³", (p.0 as f64).cbrt().round()),
+                        (7, -18),
+                        (FAMILY, 14).into_font().color(&colour),
+                    )
+            }))?;
+        }
+        for (k, (series, pts)) in bench_lines(reference, field).into_iter().enumerate() {
+            if pts.is_empty() {
+                continue;
+            }
+            any = true;
+            let colour = SERIES_COLORS[(k + 4) % SERIES_COLORS.len()];
+            chart
+                .draw_series(LineSeries::new(
+                    pts.iter().map(|p| (p.1, p.2)),
+                    colour.stroke_width(1),
+                ))?
+                .label(format!("{series} (reference)"))
+                .legend(move |(x, y)| Rectangle::new([(x + 7, y - 5), (x + 17, y + 5)], colour));
+            chart.draw_series(pts.iter().map(|p| {
+                let (x, y) = (p.1, p.2);
+                EmptyElement::at((x, y))
+                    + Rectangle::new([(-5, -5), (5, 5)], colour.stroke_width(2))
+            }))?;
+            chart.draw_series(pts.iter().map(|p| {
+                EmptyElement::at((p.1, p.2))
+                    + Text::new(
+                        format!("{}³", (p.0 as f64).cbrt().round()),
+                        (7, -18),
+                        (FAMILY, 14).into_font().color(&colour),
+                    )
+            }))?;
+        }
+        if any {
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::UpperRight)
+                .label_font((FAMILY, 14))
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .draw()?;
+        }
+    }
+    root.present()?;
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -15,6 +15,7 @@ use crate::output::progress::ProgressReporter;
 use crate::output::snapshot::{self as snapfile, Schedule};
 use crate::output::timings::{StageTotals, TimingsCsv};
 use crate::output::{particles, profile, summary};
+use crate::watch::{self, Watch, WatchSummary};
 use crate::{checkpoint, AppError};
 use serde::Serialize;
 use sph_comm::{Communicator, ReduceOp, SerialComm};
@@ -115,6 +116,9 @@ pub struct Summary {
     /// for).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub io: Option<IoSummary>,
+    /// The run's watch of its conserved quantities: bounds, and the first
+    /// step past each (see [`crate::watch`]).
+    pub watch: WatchSummary,
 }
 
 /// The snapshot and checkpoint files of a run.
@@ -215,6 +219,7 @@ pub struct Simulation<C: Communicator = SerialComm> {
     write_particles: bool,
     outputs: Outputs,
     resumed_at: Option<u64>,
+    watch: Option<Watch>,
 }
 
 impl Simulation {
@@ -284,6 +289,7 @@ impl<C: Communicator> Simulation<C> {
             )));
         }
         let (t0, dt0) = resume.map_or((0.0, scene.dt0), |s| (s.t, s.dt_prev));
+        let scene_gravity = scene.config.gravity.is_some();
         let mut hydro =
             Hydro::with_comm(kernel, scene.config, t0, dt0, comm, DomainConfig::default())?;
         match resume {
@@ -298,6 +304,7 @@ impl<C: Communicator> Simulation<C> {
             write_particles: false,
             outputs: Outputs::default(),
             resumed_at: resume.map(|s| s.step),
+            watch: Some(Watch::new(watch::Bounds::for_run(scene_gravity), false)),
         })
     }
 
@@ -356,6 +363,13 @@ impl<C: Communicator> Simulation<C> {
         self.write_particles = on;
     }
 
+    /// How the run watches its conserved quantities (default: the bounds
+    /// of [`watch::Bounds::for_run`], warnings only); `None` turns the
+    /// watch off.
+    pub fn set_watch(&mut self, watch: Option<Watch>) {
+        self.watch = watch;
+    }
+
     /// Runs until `stop`, writing outputs into `out` (created if needed, by
     /// rank 0, which writes every file). Collective: every rank calls it.
     pub fn run(&mut self, stop: Stop, out: &Path, progress: Progress) -> Result<Summary, AppError> {
@@ -397,6 +411,12 @@ impl<C: Communicator> Simulation<C> {
                 std::fs::create_dir_all(dir).map_err(|e| AppError::io(dir, e))?;
             }
         }
+        if let Some(w) = self.watch.as_mut() {
+            let all = 0..self.scene.particles.len();
+            let reads_u = self.scene.config.eos.uses_internal_energy();
+            let comm = self.hydro.domain().comm();
+            w.check_initial(&self.scene.particles, all, comm, root, reads_u)?;
+        }
         loop {
             let t = self.hydro.time();
             let steps = self.hydro.steps();
@@ -408,9 +428,13 @@ impl<C: Communicator> Simulation<C> {
             if let Stop::Time(te) = stop {
                 self.hydro.limit_next_dt(te - t);
             }
-            let r = self
+            let r = match self
                 .hydro
-                .step(&mut self.scene.particles, &mut self.scene.bbox)?;
+                .step(&mut self.scene.particles, &mut self.scene.bbox)
+            {
+                Ok(r) => r,
+                Err(e) => return Err(watch::locate(e, &self.scene.particles, self.hydro.owned())),
+            };
             first.get_or_insert(r.conserved);
             energies.push(r.t, &r.conserved);
             totals.record(&r);
@@ -431,6 +455,19 @@ impl<C: Communicator> Simulation<C> {
                 if let Some(file) = curve.as_mut() {
                     file.push(r.step, self.hydro.time(), values)?;
                 }
+            }
+            if let Some(w) = self.watch.as_mut() {
+                let checked = w.check_step(
+                    &r,
+                    &self.scene.particles,
+                    self.hydro.owned(),
+                    self.hydro.domain().comm(),
+                    root,
+                );
+                if checked.is_err() {
+                    bar.finish();
+                }
+                checked?;
             }
             bar.update(&r, self.hydro.time());
             neighbors_total = Some(r.neighbors.total);
@@ -519,6 +556,10 @@ impl<C: Communicator> Simulation<C> {
             domain: totals.domain(),
             energies: energies.checks(self.scene.energies.unwrap_or(&[]), end.t),
             io: files.any().then_some(files.summary),
+            watch: self
+                .watch
+                .as_ref()
+                .map_or_else(WatchSummary::default, Watch::summary),
         };
 
         // Rank 0's files; an error is returned after the collectives below,

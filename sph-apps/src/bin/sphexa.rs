@@ -9,6 +9,7 @@ use sph_apps::cases::{self, Scheme, SchemeOverrides};
 use sph_apps::checkpoint;
 use sph_apps::output::snapshot::{self as snapfile, Schedule};
 use sph_apps::simulation::{CheckpointEvery, Outputs, Progress, Stop};
+use sph_apps::watch::{Bounds, Watch, GRAVITY_MOMENTUM_BOUND};
 use sph_apps::{AppError, Simulation};
 use sph_comm::Communicator;
 use sph_core::PRESETS;
@@ -36,6 +37,88 @@ enum Command {
     Run(Box<RunArgs>),
     /// List the test cases with their default size, end time and scheme.
     Cases,
+    /// Error against run time: run every combination of case, size,
+    /// scheme, kernel and repeat as a fresh `sphexa run` process to the
+    /// case's end time, and write bench.csv, bench.json (with the spread
+    /// over repeats and the fitted convergence orders) and
+    /// error_vs_time.png into --out.
+    Bench(Box<BenchArgs>),
+    /// Runs built to break the solver (noisy lattices, Courant sweeps, a
+    /// strong shock tube, extreme kernels and neighbour counts, a 100x
+    /// spread of smoothing lengths, a long run at rest, extreme inputs):
+    /// each pass or fail with its figures, in OUT/stress.json and a table.
+    /// Exits non-zero when a scenario fails.
+    Stress(StressArgs),
+}
+
+#[derive(Args, Debug)]
+struct StressArgs {
+    /// The short suite (CI: under 5 minutes on 2 cores).
+    #[arg(long)]
+    quick: bool,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = parse_threads)]
+    threads: Option<usize>,
+    /// Output folder (default out/stress): stress.json and each run's files.
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+struct BenchArgs {
+    /// Test cases (each needs a reference solution for its L1 errors).
+    #[arg(required_unless_present = "from", value_parser = case_names())]
+    cases: Vec<String>,
+    /// Particles per side, comma-separated (e.g. 20,30,40), each 4 to 1000.
+    #[arg(long, value_name = "N1,N2,...", required_unless_present = "from",
+          value_delimiter = ',', value_parser = parse_side)]
+    sizes: Vec<usize>,
+    /// Run nothing: read the rows of an earlier bench.csv and write the
+    /// report (JSON, CSV, plot) again, e.g. with another --reference.
+    #[arg(long, value_name = "BENCH_CSV", conflicts_with_all = ["cases", "sizes"])]
+    from: Option<PathBuf>,
+    /// Scheme presets, comma-separated (`sphexa cases` lists them); `case`
+    /// is each case's own scheme.
+    #[arg(
+        long,
+        value_name = "S1,S2,...",
+        default_value = "case",
+        value_delimiter = ','
+    )]
+    schemes: Vec<String>,
+    /// Kernels, comma-separated (as `sphexa run --kernel`).
+    #[arg(long, value_name = "K1,K2,...", default_value = "sinc:6", value_delimiter = ',',
+          value_parser = parse_kernel)]
+    kernels: Vec<KernelChoice>,
+    /// Worker threads per rank of each run (default: all cores).
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = parse_threads)]
+    threads: Option<usize>,
+    /// MPI ranks, comma-separated: a run on R > 1 ranks is started as
+    /// `mpirun -n R sphexa run ...` (needs a `--features mpi` build).
+    #[arg(long, value_name = "R1,R2,...", default_value = "1", value_delimiter = ',',
+          value_parser = parse_threads)]
+    ranks: Vec<usize>,
+    /// Runs of each combination (their spread, min and median, is in
+    /// bench.json), at least 1.
+    #[arg(long, value_name = "R", default_value_t = 1, allow_negative_numbers = true,
+          value_parser = parse_steps)]
+    repeat: u64,
+    /// Simulated time of every run (default: each case's end time).
+    #[arg(long = "end-time", value_name = "T", allow_negative_numbers = true,
+          value_parser = parse_positive)]
+    end_time: Option<f64>,
+    /// Output folder (default out/bench); each run's own outputs go to
+    /// runs/ inside it.
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Another code's points to draw over the plot: a CSV with bench.csv's
+    /// columns (at least N, wall_s and l1_rho / l1_p / l1_v; case, scheme
+    /// and kernel name its series).
+    #[arg(long, value_name = "FILE")]
+    reference: Option<PathBuf>,
+    /// No line per run.
+    #[arg(short, long)]
+    quiet: bool,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
@@ -61,6 +144,9 @@ enum CurveArg {
     /// Morton (Z-order) curve.
     Morton,
 }
+
+/// The default of --max-momentum-drift.
+const DEFAULT_MOMENTUM_BOUND: f64 = 1e-10;
 
 /// Most worker threads per rank.
 const MAX_THREADS: i64 = 1 << 16;
@@ -163,6 +249,26 @@ struct RunArgs {
     /// No progress output.
     #[arg(short, long)]
     quiet: bool,
+    /// Stop with an error at the first conserved quantity past its bound
+    /// (--max-energy-drift, --max-momentum-drift, total mass exact, every
+    /// particle mass > 0), naming the quantity, the step and the particle
+    /// to blame. Without it the run warns once per quantity and records
+    /// the step in summary.json.
+    #[arg(long)]
+    strict: bool,
+    /// Bound of the relative total-energy drift |E - E0| / |E0| checked
+    /// after every step, a number >= 0.
+    #[arg(long, value_name = "X", default_value_t = 1e-2, allow_negative_numbers = true,
+          value_parser = parse_non_negative)]
+    max_energy_drift: f64,
+    /// Bound of the momentum drift |p - p0| relative to the momentum scale
+    /// (the largest sqrt(2 M (E_kin + |E_int|)) so far: M times the rms of
+    /// speed and thermal speed), a number >= 0. Left at its default 1e-10,
+    /// runs with self-gravity use 1e-4 (the tree's forces conserve momentum
+    /// only to its accuracy).
+    #[arg(long, value_name = "X", default_value_t = DEFAULT_MOMENTUM_BOUND, allow_negative_numbers = true,
+          value_parser = parse_non_negative)]
+    max_momentum_drift: f64,
     /// Fields of the snapshots, comma-separated (default:
     /// x,y,z,vx,vy,vz,h,m,u,rho,p,id). Snapshots are written when a
     /// --snapshot-every-steps, --snapshot-every-time or --snapshot-at
@@ -401,6 +507,21 @@ fn main() -> ExitCode {
             list_cases();
             ExitCode::SUCCESS
         }
+        Command::Stress(args) => match stress(args) {
+            Ok(true) => ExitCode::SUCCESS,
+            Ok(false) => ExitCode::FAILURE,
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::FAILURE
+            }
+        },
+        Command::Bench(args) => match bench(*args) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::FAILURE
+            }
+        },
         Command::Run(args) => match layered(
             *args,
             matches.subcommand_matches("run").expect("run was parsed"),
@@ -414,6 +535,171 @@ fn main() -> ExitCode {
             }
         },
     }
+}
+
+/// `sphexa stress`: the suite, its table, and whether every scenario passed.
+fn stress(a: StressArgs) -> Result<bool, AppError> {
+    if let Some(t) = a.threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build_global()
+            .map_err(|e| AppError::Usage(format!("cannot start {t} threads: {e}")))?;
+    }
+    let out = a.out.unwrap_or_else(|| PathBuf::from("out/stress"));
+    let outcomes = sph_apps::stress::run_suite(&sph_apps::stress::Options {
+        quick: a.quick,
+        out: out.clone(),
+        verbose: true,
+    })?;
+    print!("{}", sph_apps::stress::table(&outcomes));
+    let failed = outcomes.iter().filter(|o| !o.pass).count();
+    println!(
+        "{} of {} passed; {}",
+        outcomes.len() - failed,
+        outcomes.len(),
+        out.join("stress.json").display()
+    );
+    Ok(failed == 0)
+}
+
+/// `sphexa bench`: every combination as a child process, then the report.
+fn bench(a: BenchArgs) -> Result<(), AppError> {
+    use sph_apps::bench::{read_csv, Report, Row};
+    for name in &a.schemes {
+        if name != "case" {
+            Scheme::preset(name).map_err(|_| {
+                let names: Vec<&str> = PRESETS.iter().map(|p| p.0).collect();
+                AppError::Usage(format!(
+                    "--schemes: unknown scheme '{name}'; allowed: case (each case's own), {}",
+                    names.join(", ")
+                ))
+            })?;
+        }
+    }
+    let reference = match &a.reference {
+        Some(path) => Some((path.clone(), read_csv(path)?)),
+        None => None,
+    };
+    let out = a.out.clone().unwrap_or_else(|| PathBuf::from("out/bench"));
+    let exe = std::env::current_exe()
+        .map_err(|e| AppError::Usage(format!("cannot find the sphexa binary to run: {e}")))?;
+    let total = a.cases.len()
+        * a.sizes.len()
+        * a.schemes.len()
+        * a.kernels.len()
+        * a.ranks.len()
+        * a.repeat as usize;
+    let mut rows = match &a.from {
+        Some(path) => read_csv(path)?,
+        None => Vec::new(),
+    };
+    let mut k = 0;
+    for case in &a.cases {
+        for &side in &a.sizes {
+            for scheme in &a.schemes {
+                for kernel in &a.kernels {
+                    for &ranks in &a.ranks {
+                        for repeat in 0..a.repeat {
+                            k += 1;
+                            let kernel_text = kernel.to_string();
+                            let dir = out.join("runs").join(format!(
+                                "{case}_{scheme}_{}_{side}_r{ranks}_{repeat}",
+                                kernel_text.replace(':', "")
+                            ));
+                            let mut cmd = if ranks > 1 {
+                                let mut c = std::process::Command::new("mpirun");
+                                c.arg("-n").arg(ranks.to_string()).arg(&exe);
+                                c
+                            } else {
+                                std::process::Command::new(&exe)
+                            };
+                            cmd.args(["run", case, "-n", &side.to_string(), "-q"])
+                                .args(["--kernel", &kernel_text])
+                                .arg("--out")
+                                .arg(&dir);
+                            if scheme != "case" {
+                                cmd.args(["--scheme", scheme]);
+                            }
+                            if let Some(t) = a.threads {
+                                cmd.args(["--threads", &t.to_string()]);
+                            }
+                            if let Some(t) = a.end_time {
+                                cmd.args(["--end-time", &t.to_string()]);
+                            }
+                            let what = format!(
+                                "{case} --scheme {scheme} --kernel {kernel_text} -n {side} on {ranks} rank(s), repeat {repeat}"
+                            );
+                            let o = cmd.output().map_err(|e| {
+                                AppError::Usage(format!("{what}: could not start: {e}"))
+                            })?;
+                            if !o.status.success() {
+                                let err = String::from_utf8_lossy(&o.stderr);
+                                return Err(AppError::Usage(format!(
+                                    "{what} failed ({}): {}",
+                                    o.status,
+                                    err.trim()
+                                )));
+                            }
+                            let path = dir.join("summary.json");
+                            let text = std::fs::read_to_string(&path)
+                                .map_err(|e| AppError::io(&path, e))?;
+                            let json: serde_json::Value = serde_json::from_str(&text)
+                                .map_err(|e| AppError::Usage(format!("{}: {e}", path.display())))?;
+                            let row = Row::from_summary(&json, scheme, side as u64, repeat, &path)?;
+                            if !a.quiet {
+                                eprintln!(
+                                    "[{k}/{total}] {what}: {} particles, {} steps, {:.2} s, L1 rho {:.4e} P {:.4e} |v| {:.4e}, peak RSS {:.0} MB",
+                                    row.n, row.steps, row.wall_s, row.l1_rho, row.l1_p, row.l1_v,
+                                    row.peak_rss_bytes as f64 / 1e6
+                                );
+                            }
+                            rows.push(row);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let mut names: Vec<String> = rows.iter().map(|r| r.case.clone()).collect();
+    names.dedup();
+    let report = Report::new(rows, reference);
+    let title = format!("L1 against wall time: {}", names.join(", "));
+    report.write(&out, &title)?;
+    println!(
+        "{:<28} {:>9} {:>6} {:>10} {:>10} {:>10} {:>10} {:>9}",
+        "series", "N", "steps", "wall_s", "L1 rho", "L1 P", "L1 |v|", "RSS MB"
+    );
+    for sp in &report.spread {
+        let r = report
+            .runs
+            .iter()
+            .find(|r| r.series() == sp.series && r.n == sp.n)
+            .expect("a spread has runs");
+        println!(
+            "{:<28} {:>9} {:>6} {:>10.3} {:>10.4e} {:>10.4e} {:>10.4e} {:>9.0}",
+            sp.series,
+            sp.n,
+            r.steps,
+            sp.wall_s_median,
+            r.l1_rho,
+            r.l1_p,
+            r.l1_v,
+            sp.peak_rss_bytes_median as f64 / 1e6
+        );
+    }
+    for o in &report.orders {
+        println!(
+            "order {:<28} {:<7} {:.3} (sizes {:?})",
+            o.series, o.field, o.order, o.sizes
+        );
+    }
+    println!(
+        "wrote {}, {}, {}",
+        out.join("bench.csv").display(),
+        out.join("bench.json").display(),
+        out.join("error_vs_time.png").display()
+    );
+    Ok(())
 }
 
 /// `sphexa cases`: one line per case, then its default scheme as the
@@ -465,6 +751,30 @@ fn scheme_options(s: &Scheme, softening: Option<f64>) -> String {
         text += &format!(" --softening {soft} (self-gravity)");
     }
     text
+}
+
+/// Checks the scheme the run will use (the case's with the command line's
+/// overrides) before the solver sees it, in the options' terms.
+fn check_scheme(s: &Scheme, a: &RunArgs, case: &str) -> Result<(), AppError> {
+    if let Some(sw) = s.switches() {
+        if s.alpha() < sw.alpha_min || s.alpha().is_nan() {
+            let origin = match (a.alpha, a.av_switches, &a.scheme) {
+                (Some(_), Some(_), _) => "--av-switches on",
+                (Some(_), None, Some(_)) => "the scheme given by --scheme",
+                (Some(_), None, None) => "the scheme of case '{case}'",
+                _ => "the scheme",
+            }
+            .replace("{case}", case);
+            return Err(AppError::Usage(format!(
+                "--alpha {}: with viscosity switches on ({origin}), --alpha is the largest viscosity and must be at least the switches' floor {}; give --alpha >= {}, or --av-switches off for one constant alpha (any value >= 0)",
+                s.alpha(),
+                sw.alpha_min,
+                sw.alpha_min
+            )));
+        }
+    }
+    s.validate()
+        .map_err(|e| AppError::Usage(format!("scheme options: {e}")))
 }
 
 /// What the command line changes in the case's scheme.
@@ -754,6 +1064,16 @@ fn resolved_config(
     }
     set("write-particles", Value::Boolean(a.write_particles));
     set("quiet", Value::Boolean(a.quiet));
+    // The watch's options only when set: plain runs keep their config.toml.
+    if a.strict {
+        set("strict", Value::Boolean(true));
+    }
+    if a.max_energy_drift != 1e-2 {
+        set("max-energy-drift", Value::Float(a.max_energy_drift));
+    }
+    if a.max_momentum_drift != DEFAULT_MOMENTUM_BOUND {
+        set("max-momentum-drift", Value::Float(a.max_momentum_drift));
+    }
     if let Some(f) = &a.snapshot_fields {
         set("snapshot-fields", Value::String(f.0.join(",")));
     }
@@ -1014,7 +1334,9 @@ fn run(a: RunArgs) -> Result<(), AppError> {
     // The case applies its own scheme with what the command line
     // overrides; each rank builds only its share of the particles.
     let share = cases::Share { rank, ranks };
-    let mut scene = case.setup_share(side, config, &scheme_overrides(&a)?, share)?;
+    let overrides = scheme_overrides(&a)?;
+    check_scheme(&overrides.over(case.default_scheme()), &a, case.name())?;
+    let mut scene = case.setup_share(side, config, &overrides, share)?;
     scene.config.scheme.validate()?;
     let switches = scene.config.scheme.switches().is_some();
     // A checkpoint, or a snapshot as initial conditions, replaces the
@@ -1055,6 +1377,7 @@ fn run(a: RunArgs) -> Result<(), AppError> {
         config_text,
         loaded.as_ref().map_or(f64::NEG_INFINITY, |l| l.state.t),
     )?;
+    let gravity = scene.config.gravity.is_some();
     let n = scene.total;
     if !a.quiet && root {
         eprintln!(
@@ -1075,6 +1398,19 @@ fn run(a: RunArgs) -> Result<(), AppError> {
     };
     let result = sim.and_then(|mut sim| {
         sim.set_write_particles(a.write_particles);
+        // Self-gravity's default momentum bound is the tree's accuracy.
+        let momentum = if a.max_momentum_drift == DEFAULT_MOMENTUM_BOUND && gravity {
+            GRAVITY_MOMENTUM_BOUND
+        } else {
+            a.max_momentum_drift
+        };
+        sim.set_watch(Some(Watch::new(
+            Bounds {
+                energy: a.max_energy_drift,
+                momentum,
+            },
+            a.strict,
+        )));
         sim.set_outputs(outputs)?;
         sim.run(stop, &out, progress)
     });

@@ -1,0 +1,37 @@
+//! `sphexa stress --quick` (the CI subset of the suite) passes, and writes
+//! stress.json with a verdict and figures for every scenario.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+#[test]
+fn the_quick_stress_suite_passes() {
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("stress-quick");
+    std::fs::remove_dir_all(&out).ok();
+    let o = Command::new(env!("CARGO_BIN_EXE_sphexa"))
+        .args(["stress", "--quick", "--threads", "2", "--out"])
+        .arg(&out)
+        .output()
+        .expect("sphexa runs");
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stdout}\n{stderr}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("stress.json")).unwrap()).unwrap();
+    let all = json.as_array().unwrap();
+    assert!(all.len() >= 15, "{} scenarios", all.len());
+    for s in all {
+        assert_eq!(s["pass"], true, "{s}");
+        assert!(!s["figures"].as_object().unwrap().is_empty(), "{s}");
+    }
+    // The table lists every scenario.
+    for s in all {
+        assert!(stdout.contains(s["name"].as_str().unwrap()), "{stdout}");
+    }
+    // The zero-mass particle is named, not hidden.
+    let zero = all
+        .iter()
+        .find(|s| s["name"] == "extreme-zero-mass")
+        .unwrap();
+    assert!(zero["note"].as_str().unwrap().contains("id 100"), "{zero}");
+}

@@ -1,0 +1,240 @@
+//! Every run watches itself: runs made to fail exit non-zero with the
+//! quantity or the particle and the step in the message under `--strict`,
+//! and warn and record the same in summary.json without it.
+
+use hdf5_pure::{AttrValue, FileBuilder};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn sphexa(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sphexa"))
+        .args(args)
+        .output()
+        .expect("the sphexa binary runs")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("watch-{name}"));
+    std::fs::remove_dir_all(&dir).ok();
+    std::fs::create_dir_all(&dir).expect("scratch folder");
+    dir
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).to_string()
+}
+
+fn summary(dir: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(dir.join("summary.json")).expect("summary.json");
+    serde_json::from_str(&text).expect("JSON")
+}
+
+/// The Sedov initial state at 8^3 as an SPH-EXA-layout file (no ids: a
+/// particle's id is its row), with `edit` applied to (m, u) of row `row`.
+fn sedov_file(dir: &Path, row: usize, m: f64, u: f64) -> PathBuf {
+    let scene = sph_apps::cases::lookup("sedov")
+        .unwrap()
+        .setup(8, sph_core::HydroConfig::default())
+        .unwrap();
+    let p = &scene.particles;
+    let (mut mass, mut energy) = (p.m.clone(), p.u.clone());
+    mass[row] = m;
+    energy[row] = u;
+    let mut b = FileBuilder::new();
+    let mut g = b.create_group("Step#0");
+    g.set_attr("time", AttrValue::F64(0.0));
+    g.set_attr(
+        "box",
+        AttrValue::F64Array(vec![-0.5, 0.5, -0.5, 0.5, -0.5, 0.5]),
+    );
+    for (name, v) in [
+        ("x", &p.x),
+        ("y", &p.y),
+        ("z", &p.z),
+        ("h", &p.h),
+        ("m", &mass),
+        ("u", &energy),
+    ] {
+        g.create_dataset(name).with_f64_data(v);
+    }
+    b.add_group(g.finish());
+    let file = dir.join(format!("sedov_{row}_{m}_{u}.h5"));
+    std::fs::write(&file, b.finish().unwrap()).unwrap();
+    file
+}
+
+/// A zero-mass particle: warned about and recorded (step 0, its id and
+/// position) without --strict; an error naming it with --strict.
+#[test]
+fn a_zero_mass_particle_is_named() {
+    let dir = scratch("zero-mass");
+    let file = sedov_file(&dir, 137, 0.0, 1e-8);
+    let lax = dir.join("lax");
+    let args = |out: &Path| {
+        vec![
+            "run".to_string(),
+            "sedov".into(),
+            "--init".into(),
+            s(&file).into(),
+            "--steps".into(),
+            "2".into(),
+            "-q".into(),
+            "--threads".into(),
+            "1".into(),
+            "--out".into(),
+            s(out).into(),
+        ]
+    };
+    let a = args(&lax);
+    let o = sphexa(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    assert!(
+        e.contains("warning") && e.contains("particle mass") && e.contains("id 137"),
+        "{e}"
+    );
+    let v = &summary(&lax)["watch"]["violations"];
+    assert_eq!(v[0]["quantity"], "particle mass", "{v}");
+    assert_eq!(v[0]["step"], 0);
+    assert_eq!(v[0]["particle"]["id"], 137);
+    let strict = dir.join("strict");
+    let mut a = args(&strict);
+    a.push("--strict".into());
+    let o = sphexa(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let e = stderr(&o);
+    assert!(!o.status.success(), "--strict accepted a zero mass: {e}");
+    assert!(
+        e.contains("step 0") && e.contains("particle mass") && e.contains("id 137"),
+        "{e}"
+    );
+    assert!(!e.contains("panicked"), "{e}");
+}
+
+/// A negative internal energy in the input is refused with the particle
+/// and what is allowed, strict or not.
+#[test]
+fn a_negative_internal_energy_is_refused() {
+    let dir = scratch("negative-u");
+    let file = sedov_file(&dir, 42, 1.0 / 512.0, -1.0);
+    let o = sphexa(&[
+        "run",
+        "sedov",
+        "--init",
+        s(&file),
+        "--steps",
+        "1",
+        "-q",
+        "--out",
+        s(&dir.join("out")),
+    ]);
+    let e = stderr(&o);
+    assert!(!o.status.success(), "{e}");
+    assert!(e.contains("id 42") && e.contains("u >= 0"), "{e}");
+}
+
+/// The rotating square patch at Courant factor 1 loses energy conservation:
+/// with --strict it stops at the first step past the energy bound, naming
+/// the quantity, the step and a particle; without it the run finishes, warns
+/// once and records that same step.
+#[test]
+fn square_patch_at_courant_1_is_caught() {
+    let dir = scratch("courant");
+    let run = |out: &Path, strict: bool| {
+        let mut a = vec![
+            "run",
+            "square-patch",
+            "-n",
+            "12",
+            "--courant",
+            "1",
+            "--steps",
+            "120",
+            "-q",
+            "--threads",
+            "1",
+            "--out",
+            s(out),
+        ];
+        if strict {
+            a.push("--strict");
+        }
+        sphexa(&a)
+    };
+    let lax = dir.join("lax");
+    let o = run(&lax, false);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    assert_eq!(e.matches("warning").count(), 1, "{e}");
+    let v = summary(&lax)["watch"]["violations"].clone();
+    let first = v
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|x| x["quantity"] == "energy")
+        .unwrap_or_else(|| panic!("no energy violation recorded: {v}"))
+        .clone();
+    let step = first["step"].as_u64().unwrap();
+    assert!(first["value"].as_f64().unwrap() > 1e-2, "{first}");
+    // The recorded drift is the one conserved.csv shows at that step.
+    let csv = std::fs::read_to_string(lax.join("conserved.csv")).unwrap();
+    let e_tot = |k: u64| -> f64 {
+        let line = csv.lines().nth(k as usize).unwrap();
+        line.split(',').nth(6).unwrap().parse().unwrap()
+    };
+    let drift = |k: u64| (e_tot(k) - e_tot(1)).abs() / e_tot(1).abs();
+    assert!(drift(step) > 1e-2 && drift(step - 1) <= 1e-2, "step {step}");
+
+    let o = run(&dir.join("strict"), true);
+    let e = stderr(&o);
+    assert!(!o.status.success(), "{e}");
+    assert!(
+        e.contains(&format!("step {step}:")) && e.contains("energy drift"),
+        "{e}"
+    );
+    assert!(e.contains("particle id") && e.contains("--strict"), "{e}");
+}
+
+/// An invalid option combination is explained in the options' terms.
+#[test]
+fn alpha_below_the_switch_floor_names_the_options() {
+    let dir = scratch("alpha");
+    let o = sphexa(&[
+        "run",
+        "noh",
+        "--alpha",
+        "0",
+        "--steps",
+        "1",
+        "-q",
+        "--out",
+        s(&dir),
+    ]);
+    let e = stderr(&o);
+    assert!(!o.status.success());
+    assert!(
+        e.contains("--alpha 0") && e.contains("0.05") && e.contains("--av-switches off"),
+        "{e}"
+    );
+    assert!(!e.contains("AvSwitchParams"), "{e}");
+    // With the switches off, alpha 0 is allowed.
+    let o = sphexa(&[
+        "run",
+        "noh",
+        "-n",
+        "10",
+        "--alpha",
+        "0",
+        "--av-switches",
+        "off",
+        "--steps",
+        "1",
+        "-q",
+        "--out",
+        s(&dir),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
