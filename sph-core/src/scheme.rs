@@ -303,7 +303,8 @@ impl Scheme {
             }
             Viscosity::Switched(p) if !p.is_valid() => {
                 return Err(CoreError::Invalid(format!(
-                    "AV switch parameters {p:?} are invalid: need 0 <= alpha_min <= alpha_max (finite), decay > 0 and sound_weight >= 0"
+                    "viscosity switches: alpha_min {} and alpha_max {} must be finite with 0 <= alpha_min <= alpha_max, decay {} must be > 0 and sound_weight {} >= 0",
+                    p.alpha_min, p.alpha_max, p.decay, p.sound_weight
                 )));
             }
             _ => {}
