@@ -1,6 +1,7 @@
 //! `sphexa bench` end to end (CI-sized): three Sedov resolutions with the
-//! `paper` preset and the C++ reference points write bench.csv with every
-//! column, bench.json with the fitted orders, and a PNG that is a real plot.
+//! `std` preset and the C++ reference points write bench.csv with every
+//! column, bench.json with the fitted orders, and a PNG that is a real
+//! plot.
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -11,14 +12,7 @@ fn bench_writes_csv_json_and_a_real_plot() {
     std::fs::remove_dir_all(&out).ok();
     let reference = concat!(env!("CARGO_MANIFEST_DIR"), "/data/sphexa_cpp_sedov.csv");
     let o = Command::new(env!("CARGO_BIN_EXE_sphexa"))
-        .args([
-            "bench",
-            "sedov",
-            "--sizes",
-            "16,20,24",
-            "--schemes",
-            "paper",
-        ])
+        .args(["bench", "sedov", "--sizes", "16,20,24", "--schemes", "std"])
         .args(["--threads", "1", "--reference", reference, "-q", "--out"])
         .arg(&out)
         .output()
@@ -59,7 +53,7 @@ fn bench_writes_csv_json_and_a_real_plot() {
     assert_eq!(ns, vec![16 * 16 * 16, 20 * 20 * 20, 24 * 24 * 24]);
     for r in &rows {
         assert_eq!(r[col("case")], "sedov");
-        assert_eq!(r[col("scheme")], "paper");
+        assert_eq!(r[col("scheme")], "std");
         assert_eq!(r[col("threads")], "1");
         for name in ["wall_s", "particle_steps_per_s", "l1_rho", "l1_p", "l1_v"] {
             let v: f64 = r[col(name)].parse().unwrap();
