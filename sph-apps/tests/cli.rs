@@ -218,3 +218,42 @@ fn a_scheme_preset_is_its_options() {
     );
     assert_ne!(overridden, preset);
 }
+
+/// A build without MPI refuses runs on more than one rank, in `bench
+/// --ranks` and when an MPI launcher started it, instead of running the
+/// whole problem once per rank into the same files.
+#[cfg(not(feature = "mpi"))]
+#[test]
+fn a_build_without_mpi_refuses_more_than_one_rank() {
+    let dir = scratch("no-mpi");
+    let out = sphexa(
+        &[
+            "bench", "sedov", "--sizes", "8", "--ranks", "1,2", "-q", "--out",
+        ]
+        .iter()
+        .copied()
+        .chain([dir.to_str().expect("UTF-8")])
+        .collect::<Vec<_>>(),
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success(),
+        "bench --ranks 1,2 succeeded: {stderr}"
+    );
+    assert_mentions(&stderr, &["--ranks 2", "without MPI", "--features mpi"]);
+    assert!(
+        !dir.join("runs").exists(),
+        "bench started runs before refusing"
+    );
+
+    let out = Command::new(env!("CARGO_BIN_EXE_sphexa"))
+        .args(["run", "sedov", "-n", "8", "--steps", "1", "-q", "--out"])
+        .arg(dir.join("launched"))
+        .env("OMPI_COMM_WORLD_SIZE", "2")
+        .output()
+        .expect("the sphexa binary runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "a run as one of 2 ranks succeeded");
+    assert_mentions(&stderr, &["one of 2 MPI ranks", "without MPI"]);
+    assert!(!dir.join("launched").join("conserved.csv").exists());
+}

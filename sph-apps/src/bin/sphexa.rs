@@ -98,6 +98,11 @@ struct BenchArgs {
     #[arg(long, value_name = "R1,R2,...", default_value = "1", value_delimiter = ',',
           value_parser = parse_threads)]
     ranks: Vec<usize>,
+    /// The MPI launcher for runs on R > 1 ranks, as words (it is given
+    /// `-n R` and the run's command line), e.g. "srun" or
+    /// "mpirun --oversubscribe".
+    #[arg(long, value_name = "CMD", default_value = "mpirun")]
+    mpirun: String,
     /// Runs of each combination (their spread, min and median, is in
     /// bench.json), at least 1.
     #[arg(long, value_name = "R", default_value_t = 1, allow_negative_numbers = true,
@@ -576,6 +581,20 @@ fn bench(a: BenchArgs) -> Result<(), AppError> {
             })?;
         }
     }
+    let launcher: Vec<&str> = a.mpirun.split_whitespace().collect();
+    if let Some(&r) = a.ranks.iter().find(|&&r| r > 1) {
+        if !cfg!(feature = "mpi") {
+            return Err(AppError::Usage(format!(
+                "--ranks {r}: this sphexa was built without MPI; build it with \
+                 `cargo build --release -p sph-apps --features mpi` for runs on more than one rank"
+            )));
+        }
+        if launcher.is_empty() {
+            return Err(AppError::Usage(
+                "--mpirun '': give the MPI launcher, e.g. mpirun or srun".into(),
+            ));
+        }
+    }
     let reference = match &a.reference {
         Some(path) => Some((path.clone(), read_csv(path)?)),
         None => None,
@@ -607,7 +626,8 @@ fn bench(a: BenchArgs) -> Result<(), AppError> {
                                 kernel_text.replace(':', "")
                             ));
                             let mut cmd = if ranks > 1 {
-                                let mut c = std::process::Command::new("mpirun");
+                                let mut c = std::process::Command::new(launcher[0]);
+                                c.args(&launcher[1..]);
                                 c.arg("-n").arg(ranks.to_string()).arg(&exe);
                                 c
                             } else {
@@ -1268,6 +1288,15 @@ fn outputs(a: &RunArgs, config: String, t0: f64) -> Result<Outputs, AppError> {
     })
 }
 
+/// The rank count an MPI launcher announces to the processes it starts
+/// (Open MPI; MPICH and others through PMI), if any.
+#[cfg(not(feature = "mpi"))]
+fn launched_ranks() -> Option<usize> {
+    ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE"]
+        .iter()
+        .find_map(|k| std::env::var(k).ok()?.trim().parse().ok())
+}
+
 fn run(a: RunArgs) -> Result<(), AppError> {
     let Some(case_name) = a.case.clone() else {
         return Err(AppError::Usage(format!(
@@ -1325,6 +1354,14 @@ fn run(a: RunArgs) -> Result<(), AppError> {
         (None, Some(t)) => Stop::Time(t),
         (None, None) => Stop::Time(case.default_end_time()),
     };
+    #[cfg(not(feature = "mpi"))]
+    if let Some(n) = launched_ranks().filter(|&n| n > 1) {
+        return Err(AppError::Usage(format!(
+            "started as one of {n} MPI ranks, but this sphexa was built without MPI: every rank \
+             would run the whole problem into the same files; build it with \
+             `cargo build --release -p sph-apps --features mpi`, or run it without mpirun"
+        )));
+    }
     #[cfg(feature = "mpi")]
     let comm = sph_comm::MpiComm::init()?;
     #[cfg(not(feature = "mpi"))]
