@@ -12,6 +12,7 @@
 //! violation) and nothing non-finite is written.
 
 use crate::cases::{self, Scene};
+use crate::rng::SplitMix64;
 use crate::simulation::{Progress, Stop};
 use crate::{AppError, Simulation, Summary};
 use serde::Serialize;
@@ -48,21 +49,6 @@ pub struct Options {
     pub out: PathBuf,
     /// Print each scenario's line as it finishes.
     pub verbose: bool,
-}
-
-/// A deterministic generator (SplitMix64) of uniform numbers in [0, 1).
-#[derive(Debug, Clone)]
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    }
 }
 
 /// The numerical controls of a scenario.
@@ -202,7 +188,7 @@ fn noisy_lattice(o: &Options, noise: f64) -> Result<Outcome, AppError> {
     let (side, steps) = if o.quick { (10, 150) } else { (16, 400) };
     let mut s = uniform_box(side, 1.0, config(100, 150, 0.2))?;
     let dx = 1.0 / side as f64;
-    let mut rng = Rng(7 + (noise * 100.0) as u64);
+    let mut rng = SplitMix64(7 + (noise * 100.0) as u64);
     let p = &mut s.particles;
     for i in 0..p.len() {
         for c in [&mut p.x, &mut p.y, &mut p.z] {

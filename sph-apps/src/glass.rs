@@ -1,0 +1,455 @@
+//! Glass initial conditions: a periodic block of equal-mass particles with
+//! no lattice directions and nearly uniform SPH density, made by relaxing
+//! random positions with the solver's own kernel and neighbour count.
+//!
+//! [`relax`] places `side^3` particles at random in the periodic unit cube
+//! (an ideal gas at uniform `u`, so pressure follows density) and lets the
+//! pressure gradients push them apart, overdamped: after every step of the
+//! solver each particle is moved by [`KAPPA`]` h^2 a / c^2` down the
+//! pressure gradient instead of the solver's move (never more than
+//! [`MAX_SHIFT`] of its `h`), its velocity and the integrator's history are
+//! cleared, and the heat the viscosity made is taken out again. It stops when the density scatter
+//! `std(rho) / mean(rho)` falls below the tolerance or at the step limit.
+//!
+//! [`cached`] keeps every glass in a folder under a name made of
+//! `(side, kernel, ng0, ngmax)`, checksummed (`sph-io`), so a glass is
+//! relaxed once and reused. [`Glass::fill`] tiles a box with copies of a
+//! block scaled to a given mean spacing.
+//!
+//! ```
+//! use sph_apps::glass::{relax, GlassSpec};
+//!
+//! let spec = GlassSpec { side: 8, ..GlassSpec::default() };
+//! let glass = relax(&spec, 400, 0.02, |_| {})?;
+//! assert_eq!(glass.pos.len(), 512);
+//! // Random positions scatter the density by tens of percent; the glass
+//! // by about one.
+//! assert!(glass.report.rho_scatter < 0.25 * glass.report.rho_scatter_start);
+//! // Copies of the block fill a box at spacing 0.1.
+//! let filled = glass.fill([0.0; 3], [1.6, 0.8, 0.8], 0.1);
+//! assert_eq!(filled.len(), 16 * 8 * 8);
+//! # Ok::<(), sph_apps::AppError>(())
+//! ```
+
+use crate::cases::{field_set, initial_h, Physics, SchemeOverrides, Share};
+use crate::rng::SplitMix64;
+use crate::AppError;
+use serde::Serialize;
+use sph_core::{Gradients, Hydro, HydroConfig, Particles, Scheme};
+use sph_io::{
+    Attr, BoxSpec, FieldData, H5Part, Selection, Snapshot, SnapshotReader, SnapshotWriter,
+};
+use sph_kernels::{KernelChoice, Tabulated};
+use sph_tree::{Boundary, BoundingBox};
+use std::path::{Path, PathBuf};
+
+/// Largest move of one relaxation step, in units of the particle's `h`:
+/// a particle that random placement put on top of another is pushed hard,
+/// and must not jump across its neighbourhood.
+pub const MAX_SHIFT: f64 = 0.2;
+
+/// Relaxation step: each particle moves by `KAPPA h^2 a / c^2` (the
+/// solver's own move, about `a dt^2 = 0.04 h^2 a / c^2` at Courant 0.2,
+/// takes 6x more steps). Measured on 16^3 with sinc:6 and ng0 = 100,
+/// steps to a density scatter of 0.01: 0.1 about 60, 0.2 41, 0.4 never
+/// (the moves overshoot and oscillate).
+pub const KAPPA: f64 = 0.2;
+
+/// What a glass is made for: its particle count and the kernel and
+/// neighbour counts of the runs that use it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GlassSpec {
+    /// Particles per side (`side^3` in the block).
+    pub side: usize,
+    /// Kernel.
+    pub kernel: KernelChoice,
+    /// Target neighbour count.
+    pub ng0: usize,
+    /// Most neighbours.
+    pub ngmax: usize,
+}
+
+impl Default for GlassSpec {
+    /// 16^3 particles for the default kernel and neighbour counts.
+    fn default() -> Self {
+        let n = HydroConfig::default().neighbors;
+        GlassSpec {
+            side: 16,
+            kernel: KernelChoice::default(),
+            ng0: n.ng0,
+            ngmax: n.ngmax,
+        }
+    }
+}
+
+impl GlassSpec {
+    /// The cache file's name, e.g. `glass_16_sinc6_ng100_150.h5`.
+    pub fn file_name(&self) -> String {
+        let kernel: String = self
+            .kernel
+            .to_string()
+            .chars()
+            .filter(char::is_ascii_alphanumeric)
+            .collect();
+        format!(
+            "glass_{}_{kernel}_ng{}_{}.h5",
+            self.side, self.ng0, self.ngmax
+        )
+    }
+
+    fn check(&self) -> Result<(), AppError> {
+        // Below 6 per side the kernel's support (about 2.9 spacings at
+        // ng0 = 100) reaches over half the block: a particle would meet
+        // its own periodic image.
+        if self.side < 6 || self.side > 200 {
+            return Err(AppError::Usage(format!(
+                "glass: {} particles per side; allowed 6 to 200",
+                self.side
+            )));
+        }
+        if self.ng0 < 8 || self.ng0 > self.ngmax {
+            return Err(AppError::Usage(format!(
+                "glass: ng0 {} must be at least 8 and at most ngmax {}",
+                self.ng0, self.ngmax
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// How a relaxation went.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Relaxation {
+    /// Solver steps taken.
+    pub steps: u64,
+    /// `std(rho) / mean(rho)` of the random start.
+    pub rho_scatter_start: f64,
+    /// The same at the end.
+    pub rho_scatter: f64,
+    /// Closest pair of the random start, in units of the mean spacing.
+    pub min_pair_start: f64,
+    /// The same at the end.
+    pub min_pair: f64,
+}
+
+/// One relaxation step's figures, for progress reports.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RelaxStep {
+    /// Step number.
+    pub step: u64,
+    /// Largest move of the step, in units of the mean spacing.
+    pub max_shift: f64,
+}
+
+/// A glass block: positions in the periodic unit cube `[0, 1)^3`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Glass {
+    /// What it was made for.
+    pub spec: GlassSpec,
+    /// Positions, `side^3` of them.
+    pub pos: Vec<[f64; 3]>,
+    /// How its relaxation went.
+    pub report: Relaxation,
+}
+
+impl Glass {
+    /// Copies of the block, each scaled to `side * spacing` per edge,
+    /// tiled from `lo` over the box `[lo, hi)`: the points inside it, in
+    /// tile order (x fastest). The mean spacing is `spacing`; a box whose
+    /// edges are whole multiples of the tile has no seam across its
+    /// periodic boundaries.
+    pub fn fill(&self, lo: [f64; 3], hi: [f64; 3], spacing: f64) -> Vec<[f64; 3]> {
+        let tile = self.spec.side as f64 * spacing;
+        let tiles = [0, 1, 2].map(|k| (((hi[k] - lo[k]) / tile) - 1e-9).ceil().max(0.0) as usize);
+        let mut out = Vec::new();
+        for t in 0..tiles[0] * tiles[1] * tiles[2] {
+            let c = [
+                t % tiles[0],
+                t / tiles[0] % tiles[1],
+                t / (tiles[0] * tiles[1]),
+            ];
+            for q in &self.pos {
+                let x = [0, 1, 2].map(|k| lo[k] + (c[k] as f64 + q[k]) * tile);
+                if (0..3).all(|k| x[k] < hi[k]) {
+                    out.push(x);
+                }
+            }
+        }
+        out
+    }
+}
+
+/// The cache folder: `$SPHEXA_GLASS_DIR`, else `glass/` under the working
+/// directory.
+pub fn default_cache_dir() -> PathBuf {
+    std::env::var_os("SPHEXA_GLASS_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from("glass"))
+}
+
+/// Relaxes `spec.side^3` random particles in the periodic unit cube until
+/// the density scatter is below `tolerance` or `max_steps` have run;
+/// `progress` sees every step.
+///
+/// # Errors
+/// A spec out of range, or a failure of the solver.
+pub fn relax(
+    spec: &GlassSpec,
+    max_steps: u64,
+    tolerance: f64,
+    mut progress: impl FnMut(RelaxStep),
+) -> Result<Glass, AppError> {
+    spec.check()?;
+    let n = spec.side.pow(3);
+    let spacing = 1.0 / spec.side as f64;
+    let mut config = HydroConfig::default();
+    config.neighbors.ng0 = spec.ng0;
+    config.neighbors.ngmax = spec.ngmax;
+    // Kernel gradients: the cheapest operator; the gas is at rest, so the
+    // viscosity has nothing to do.
+    let scheme = Scheme {
+        gradients: Gradients::Kernel,
+        grad_h: false,
+        ..Scheme::PAPER
+    };
+    SchemeOverrides::default().apply(scheme, Physics::IDEAL_GAS, &mut config);
+    let (mut p, _) = Share::WHOLE.particles(n, field_set(&config));
+    let mut rng = SplitMix64(0x5EED ^ n as u64);
+    let h0 = initial_h(spec.ng0, 1.0, n);
+    const U: f64 = 1.0;
+    for i in 0..n {
+        (p.x[i], p.y[i], p.z[i]) = (rng.next(), rng.next(), rng.next());
+        p.m[i] = 1.0 / n as f64;
+        p.h[i] = h0;
+        p.u[i] = U;
+    }
+    let mut bbox = BoundingBox::new([0.0; 3], [1.0; 3], [Boundary::Periodic; 3])?;
+    let kernel: Tabulated = spec.kernel.tabulate(Tabulated::DEFAULT_POINTS)?;
+    let gamma = match Physics::IDEAL_GAS.eos {
+        sph_core::Eos::IdealGas { gamma } => gamma,
+        _ => 5.0 / 3.0,
+    };
+    let sound = (gamma * (gamma - 1.0) * U).sqrt();
+    let mut hydro = Hydro::new(kernel, config, 0.0, 0.2 * h0 / sound)?;
+    hydro.prepare(&mut p);
+
+    let min_pair_start = closest_pair(&p, 0..n, spec.side) / spacing;
+    hydro.evaluate_density(&mut p, &mut bbox)?;
+    let rho_scatter_start = scatter(&p.rho[hydro.owned()]);
+    let mut rho_scatter = rho_scatter_start;
+    let mut steps = 0;
+    while steps < max_steps && rho_scatter > tolerance {
+        hydro.step(&mut p, &mut bbox)?;
+        steps += 1;
+        let owned = hydro.owned();
+        let mut max_shift: f64 = 0.0;
+        for i in owned.clone() {
+            // Undo the solver's move; move by kappa h^2 a / c^2 instead.
+            let k = KAPPA * p.h[i] * p.h[i] / (sound * sound);
+            let mut d = [k * p.ax[i], k * p.ay[i], k * p.az[i]];
+            let len = d.iter().map(|c| c * c).sum::<f64>().sqrt();
+            let cap = MAX_SHIFT * p.h[i];
+            if len > cap {
+                d = d.map(|c| c * cap / len);
+            }
+            let x = bbox.wrap([
+                p.x[i] - p.dx[i] + d[0],
+                p.y[i] - p.dy[i] + d[1],
+                p.z[i] - p.dz[i] + d[2],
+            ]);
+            (p.x[i], p.y[i], p.z[i]) = (x[0], x[1], x[2]);
+            max_shift = max_shift.max(len.min(cap));
+        }
+        // Overdamped: no momentum, no heat carried into the next step.
+        for c in [
+            &mut p.vx, &mut p.vy, &mut p.vz, &mut p.dx, &mut p.dy, &mut p.dz,
+        ] {
+            c.fill(0.0);
+        }
+        p.u.fill(U);
+        p.du_prev.fill(0.0);
+        // The step's density is that of the positions before its move.
+        rho_scatter = scatter(&p.rho[owned]);
+        progress(RelaxStep {
+            step: steps,
+            max_shift: max_shift / spacing,
+        });
+    }
+    hydro.evaluate_density(&mut p, &mut bbox)?;
+    let owned = hydro.owned();
+    rho_scatter = scatter(&p.rho[owned.clone()]);
+    let min_pair = closest_pair(&p, owned.clone(), spec.side) / spacing;
+    let pos = owned.map(|i| [p.x[i], p.y[i], p.z[i]]).collect();
+    Ok(Glass {
+        spec: *spec,
+        pos,
+        report: Relaxation {
+            steps,
+            rho_scatter_start,
+            rho_scatter,
+            min_pair_start,
+            min_pair,
+        },
+    })
+}
+
+/// The glass of `spec` from `dir` if it is there (checked against its
+/// checksums and its spec), else relaxed (to a density scatter of
+/// [`TOLERANCE`], at most [`MAX_STEPS`] steps) and stored there.
+///
+/// # Errors
+/// A spec out of range, a failed relaxation, or a cache file that cannot
+/// be written, or exists and is not a glass of `spec` (it is named; delete
+/// it to make a new one).
+pub fn cached(spec: &GlassSpec, dir: &Path) -> Result<Glass, AppError> {
+    spec.check()?;
+    let path = dir.join(spec.file_name());
+    if path.exists() {
+        return read(&path, spec);
+    }
+    let glass = relax(spec, MAX_STEPS, TOLERANCE, |_| {})?;
+    std::fs::create_dir_all(dir).map_err(|e| AppError::io(dir, e))?;
+    write(&glass, &path)?;
+    Ok(glass)
+}
+
+/// Density scatter at which [`cached`] stops relaxing.
+pub const TOLERANCE: f64 = 0.005;
+/// Most steps [`cached`] relaxes.
+pub const MAX_STEPS: u64 = 1000;
+
+/// Writes `glass` as one H5Part step (`x`, `y`, `z`; the spec and the
+/// relaxation as attributes).
+///
+/// # Errors
+/// The file cannot be written.
+pub fn write(glass: &Glass, path: &Path) -> Result<(), AppError> {
+    let bbox = BoxSpec {
+        lo: [0.0; 3],
+        hi: [1.0; 3],
+        periodic: [true; 3],
+    };
+    let mut s = Snapshot::new(glass.report.steps, 0.0, 0.0, bbox);
+    let r = glass.report;
+    s.set_attr("glass_side", Attr::I64(glass.spec.side as i64))
+        .set_attr("kernel", Attr::Str(glass.spec.kernel.to_string()))
+        .set_attr("ng0", Attr::I64(glass.spec.ng0 as i64))
+        .set_attr("ngmax", Attr::I64(glass.spec.ngmax as i64))
+        .set_attr("rho_scatter_start", Attr::F64(r.rho_scatter_start))
+        .set_attr("rho_scatter", Attr::F64(r.rho_scatter))
+        .set_attr("min_pair_start", Attr::F64(r.min_pair_start))
+        .set_attr("min_pair", Attr::F64(r.min_pair));
+    for (k, name) in ["x", "y", "z"].iter().enumerate() {
+        s.set_field(
+            name,
+            FieldData::F64(glass.pos.iter().map(|q| q[k]).collect()),
+        );
+    }
+    H5Part.write(path, &s, &Selection::All)?;
+    Ok(())
+}
+
+/// Reads a glass written by [`write`], checking that it is one of `spec`.
+///
+/// # Errors
+/// An unreadable or corrupted file, or a glass of another spec.
+pub fn read(path: &Path, spec: &GlassSpec) -> Result<Glass, AppError> {
+    let s = H5Part.read_step(path, 0, &Selection::All)?;
+    let bad = |what: &str| {
+        AppError::Usage(format!(
+            "{}: {what}; not the glass for {} particles per side, kernel {}, ng0 {}, ngmax {} (delete it to make a new one)",
+            path.display(),
+            spec.side,
+            spec.kernel,
+            spec.ng0,
+            spec.ngmax
+        ))
+    };
+    let whole = |k: &str| match s.attr(k) {
+        Some(Attr::I64(v)) if *v >= 0 => Ok(*v as usize),
+        _ => Err(bad(&format!("no attribute {k}"))),
+    };
+    let real = |k: &str| match s.attr(k) {
+        Some(Attr::F64(v)) => Ok(*v),
+        _ => Err(bad(&format!("no attribute {k}"))),
+    };
+    let kernel = match s.attr("kernel") {
+        Some(Attr::Str(k)) => k.clone(),
+        _ => return Err(bad("no attribute kernel")),
+    };
+    if whole("glass_side")? != spec.side
+        || whole("ng0")? != spec.ng0
+        || whole("ngmax")? != spec.ngmax
+        || kernel != spec.kernel.to_string()
+    {
+        return Err(bad("its attributes differ"));
+    }
+    let coord = |k: &str| {
+        s.field(k)
+            .and_then(FieldData::as_f64)
+            .ok_or_else(|| bad(&format!("no f64 field {k}")))
+    };
+    let (x, y, z) = (coord("x")?, coord("y")?, coord("z")?);
+    if x.len() != spec.side.pow(3) {
+        return Err(bad(&format!("{} particles", x.len())));
+    }
+    let inside = |v: f64| (0.0..1.0).contains(&v);
+    if !x.iter().chain(y).chain(z).all(|&v| inside(v)) {
+        return Err(bad("a position outside [0, 1)"));
+    }
+    Ok(Glass {
+        spec: *spec,
+        pos: (0..x.len()).map(|i| [x[i], y[i], z[i]]).collect(),
+        report: Relaxation {
+            steps: s.step,
+            rho_scatter_start: real("rho_scatter_start")?,
+            rho_scatter: real("rho_scatter")?,
+            min_pair_start: real("min_pair_start")?,
+            min_pair: real("min_pair")?,
+        },
+    })
+}
+
+/// `std(v) / mean(v)`.
+fn scatter(v: &[f64]) -> f64 {
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / n;
+    var.sqrt() / mean
+}
+
+/// The closest pair among `range` of `p` in the periodic unit cube, by
+/// cells of about one mean spacing (`side` per edge).
+fn closest_pair(p: &Particles, range: std::ops::Range<usize>, side: usize) -> f64 {
+    let cells = side.max(3);
+    let cell_of = |v: f64| ((v * cells as f64) as usize).min(cells - 1);
+    let mut grid: Vec<Vec<usize>> = vec![Vec::new(); cells * cells * cells];
+    let index = |c: [usize; 3]| c[0] + cells * (c[1] + cells * c[2]);
+    for i in range.clone() {
+        grid[index([cell_of(p.x[i]), cell_of(p.y[i]), cell_of(p.z[i])])].push(i);
+    }
+    let wrap = |d: f64| d - d.round();
+    let mut best = f64::INFINITY;
+    // A pair closer than one cell edge lies in adjacent cells; farther
+    // pairs do not matter once any pair below one edge is found, and a
+    // block always has one (the mean spacing is one edge).
+    for i in range {
+        let c = [cell_of(p.x[i]), cell_of(p.y[i]), cell_of(p.z[i])];
+        for o in 0..27 {
+            let nb = [o % 3, o / 3 % 3, o / 9].map(|k| k as isize - 1);
+            let cn = [0, 1, 2].map(|k| (c[k] as isize + nb[k]).rem_euclid(cells as isize) as usize);
+            for &j in &grid[index(cn)] {
+                if j <= i {
+                    continue;
+                }
+                let d = [
+                    wrap(p.x[i] - p.x[j]),
+                    wrap(p.y[i] - p.y[j]),
+                    wrap(p.z[i] - p.z[j]),
+                ];
+                best = best.min(d.iter().map(|c| c * c).sum::<f64>());
+            }
+        }
+    }
+    best.sqrt()
+}
