@@ -179,11 +179,18 @@ impl Glass {
     }
 }
 
-/// The cache folder: `$SPHEXA_GLASS_DIR`, else `glass/` under the working
-/// directory.
+/// The cache folder: `$SPHEXA_GLASS_DIR`, else
+/// `$XDG_CACHE_HOME/sphexa/glass`, else `$HOME/.cache/sphexa/glass`, else
+/// `glass/` under the working directory.
 pub fn default_cache_dir() -> PathBuf {
-    std::env::var_os("SPHEXA_GLASS_DIR")
-        .map(PathBuf::from)
+    let var = |k: &str| {
+        std::env::var_os(k)
+            .filter(|v| !v.is_empty())
+            .map(PathBuf::from)
+    };
+    var("SPHEXA_GLASS_DIR")
+        .or_else(|| var("XDG_CACHE_HOME").map(|d| d.join("sphexa").join("glass")))
+        .or_else(|| var("HOME").map(|d| d.join(".cache").join("sphexa").join("glass")))
         .unwrap_or_else(|| PathBuf::from("glass"))
 }
 
@@ -218,7 +225,7 @@ pub fn relax(
     let h0 = initial_h(spec.ng0, 1.0, n);
     const U: f64 = 1.0;
     for i in 0..n {
-        (p.x[i], p.y[i], p.z[i]) = (rng.next(), rng.next(), rng.next());
+        (p.x[i], p.y[i], p.z[i]) = (rng.uniform(), rng.uniform(), rng.uniform());
         p.m[i] = 1.0 / n as f64;
         p.h[i] = h0;
         p.u[i] = U;
@@ -293,23 +300,30 @@ pub fn relax(
     })
 }
 
-/// The glass of `spec` from `dir` if it is there (checked against its
-/// checksums and its spec), else relaxed (to a density scatter of
-/// [`TOLERANCE`], at most [`MAX_STEPS`] steps) and stored there.
+/// The glass of `spec` from `dir` if it is there and reads back as one
+/// (checksums, spec), else relaxed (to a density scatter of
+/// [`TOLERANCE`], at most [`MAX_STEPS`] steps) and stored there, replacing
+/// a damaged or foreign file of that name.
 ///
 /// # Errors
-/// A spec out of range, a failed relaxation, or a cache file that cannot
-/// be written, or exists and is not a glass of `spec` (it is named; delete
-/// it to make a new one).
+/// A spec out of range, a failed relaxation, or a cache folder that
+/// cannot be written.
 pub fn cached(spec: &GlassSpec, dir: &Path) -> Result<Glass, AppError> {
     spec.check()?;
     let path = dir.join(spec.file_name());
-    if path.exists() {
-        return read(&path, spec);
+    if let Ok(glass) = read(&path, spec) {
+        return Ok(glass);
     }
     let glass = relax(spec, MAX_STEPS, TOLERANCE, |_| {})?;
     std::fs::create_dir_all(dir).map_err(|e| AppError::io(dir, e))?;
-    write(&glass, &path)?;
+    // Under a name of this writer first: the ranks of a distributed run,
+    // or threads of one process, may relax the same glass (bit-identical)
+    // and store it at once.
+    static WRITERS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let k = WRITERS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let mine = dir.join(format!("{}.{}-{k}", spec.file_name(), std::process::id()));
+    write(&glass, &mine)?;
+    std::fs::rename(&mine, &path).map_err(|e| AppError::io(&path, e))?;
     Ok(glass)
 }
 

@@ -192,7 +192,7 @@ fn noisy_lattice(o: &Options, noise: f64) -> Result<Outcome, AppError> {
     let p = &mut s.particles;
     for i in 0..p.len() {
         for c in [&mut p.x, &mut p.y, &mut p.z] {
-            let mut v = c[i] + noise * dx * (2.0 * rng.next() - 1.0);
+            let mut v = c[i] + noise * dx * (2.0 * rng.uniform() - 1.0);
             v -= (v + 0.5).div_euclid(1.0);
             c[i] = v;
         }

@@ -53,8 +53,8 @@ enum Command {
     /// periodic unit cube with the solver's kernel until the density
     /// scatter std(rho)/mean(rho) is below --tolerance, and write them
     /// (x, y, z in [0, 1), H5Part) to --out, by default into the glass
-    /// cache ($SPHEXA_GLASS_DIR, else ./glass) that cases set up from
-    /// glass read.
+    /// cache that cases set up from glass read ($SPHEXA_GLASS_DIR, else
+    /// $XDG_CACHE_HOME/sphexa/glass, else ~/.cache/sphexa/glass).
     Glass(GlassArgs),
 }
 
@@ -230,6 +230,13 @@ struct RunArgs {
     /// `wendland-c4`, `wendland-c6`.
     #[arg(long, default_value = "sinc:6", value_parser = parse_kernel)]
     kernel: KernelChoice,
+    /// Cubic lattices even where the case starts from glass (sod). Glass
+    /// blocks are relaxed with the run's kernel and neighbour counts on
+    /// first use and cached in $SPHEXA_GLASS_DIR, else
+    /// $XDG_CACHE_HOME/sphexa/glass, else ~/.cache/sphexa/glass (see
+    /// `sphexa glass`).
+    #[arg(long)]
+    lattice: bool,
     /// Target neighbour count, self included: 8 to --ngmax.
     #[arg(long, default_value_t = 100, allow_negative_numbers = true,
           value_parser = parse_count)]
@@ -1156,6 +1163,9 @@ fn resolved_config(
         set("threads", Value::Integer(n as i64));
     }
     set("kernel", Value::String(a.kernel.to_string()));
+    if a.lattice {
+        set("lattice", Value::Boolean(true));
+    }
     set("ng0", Value::Integer(a.ng0 as i64));
     set("ngmax", Value::Integer(a.ngmax as i64));
     if let Some(s) = &a.scheme {
@@ -1476,7 +1486,15 @@ fn run(a: RunArgs) -> Result<(), AppError> {
     let share = cases::Share { rank, ranks };
     let overrides = scheme_overrides(&a)?;
     check_scheme(&overrides.over(case.default_scheme()), &a, case.name())?;
-    let mut scene = case.setup_share(side, config, &overrides, share)?;
+    let layout = if a.lattice {
+        cases::Layout::Lattice
+    } else {
+        cases::Layout::Glass {
+            kernel: a.kernel,
+            dir: sph_apps::glass::default_cache_dir(),
+        }
+    };
+    let mut scene = case.setup_share(side, config, &overrides, share, &layout)?;
     scene.config.scheme.validate()?;
     let switches = scene.config.scheme.switches().is_some();
     // A checkpoint, or a snapshot as initial conditions, replaces the

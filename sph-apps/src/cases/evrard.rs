@@ -2,7 +2,7 @@
 //! falls in under its own gravity, bounces and settles; compared with the
 //! energies of a 1-D Lagrangian reference.
 
-use super::{Listing, cube_lattice, field_set, initial_h, Case, EnergyPoint, InitialState, Physics, Scheme, Share};
+use super::{Layout, Listing, cube_lattice, field_set, initial_h, Case, EnergyPoint, InitialState, Physics, Scheme, Share};
 use crate::AppError;
 use sph_core::{Eos, HydroConfig};
 use sph_tree::{Boundary, BoundingBox};
@@ -86,6 +86,7 @@ impl Case for EvrardCollapse {
         side: usize,
         config: &HydroConfig,
         share: Share,
+        _layout: &Layout,
     ) -> Result<InitialState, AppError> {
         let pts: Vec<[f64; 3]> = cube_lattice(side, -1.0, 2.0)
             .filter(|q| q[0] * q[0] + q[1] * q[1] + q[2] * q[2] < 1.0)

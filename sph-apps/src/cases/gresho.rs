@@ -5,7 +5,7 @@
 //! spacings in z, all periodic, to t = 1. The error is `L1(v_phi)` for
 //! cylindrical radii up to 0.5.
 
-use super::{field_set, initial_h, Case, InitialState, Listing, Reference, Scheme, Share};
+use super::{Layout, field_set, initial_h, Case, InitialState, Listing, Reference, Scheme, Share};
 use crate::reference::Gresho;
 use crate::AppError;
 use sph_core::HydroConfig;
@@ -42,6 +42,7 @@ impl Case for GreshoVortex {
         side: usize,
         config: &HydroConfig,
         share: Share,
+        _layout: &Layout,
     ) -> Result<InitialState, AppError> {
         let vortex = Gresho::standard(GAMMA)?;
         let layers = LAYERS.max(1);

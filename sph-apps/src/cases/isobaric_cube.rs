@@ -12,7 +12,7 @@
 //! the max norm, `max(|x|, |y|, |z|)`, so the profile shows the interface
 //! at 0.25 as a step.
 
-use super::{
+use super::{Layout, 
     field_set, initial_h, Case, InitialState, Listing, Reference, Scheme, Share, Stationary,
 };
 use crate::AppError;
@@ -58,6 +58,7 @@ impl Case for IsobaricCube {
         side: usize,
         config: &HydroConfig,
         share: Share,
+        _layout: &Layout,
     ) -> Result<InitialState, AppError> {
         if !side.is_multiple_of(2) {
             return Err(AppError::Usage(format!(

@@ -10,7 +10,7 @@
 //! The particles sit on one cubic lattice with masses `rho(y) dx^3`, so the
 //! smoothed profile is resolved without stretching the lattice.
 
-use super::{
+use super::{Layout, 
     field_set, initial_h, Case, Curve, InitialState, Listing, Reference, Scheme, Share,
 };
 use crate::AppError;
@@ -109,6 +109,7 @@ impl Case for KelvinHelmholtz {
         side: usize,
         config: &HydroConfig,
         share: Share,
+        _layout: &Layout,
     ) -> Result<InitialState, AppError> {
         let dx = 1.0 / side as f64;
         let n = side * side * LAYERS;

@@ -136,6 +136,7 @@ pub trait Case: Sync + std::fmt::Debug {
         side: usize,
         config: &HydroConfig,
         share: Share,
+        layout: &Layout,
     ) -> Result<InitialState, AppError>;
 
     /// The analytic solution to compare `initial` with, if any.
@@ -174,7 +175,7 @@ pub trait Case: Sync + std::fmt::Debug {
         config: HydroConfig,
         overrides: &SchemeOverrides,
     ) -> Result<Scene, AppError> {
-        self.setup_share(side, config, overrides, Share::WHOLE)
+        self.setup_share(side, config, overrides, Share::WHOLE, &Layout::default())
     }
 
     /// As [`Case::setup_with`], holding only the particles of `share`
@@ -185,6 +186,7 @@ pub trait Case: Sync + std::fmt::Debug {
         mut config: HydroConfig,
         overrides: &SchemeOverrides,
         share: Share,
+        layout: &Layout,
     ) -> Result<Scene, AppError> {
         if side == 0 {
             return Err(AppError::Usage(format!(
@@ -193,7 +195,7 @@ pub trait Case: Sync + std::fmt::Debug {
             )));
         }
         overrides.apply(self.default_scheme(), self.physics(), &mut config);
-        let initial = self.initial_state(side, &config, share)?;
+        let initial = self.initial_state(side, &config, share, layout)?;
         let reference = self.reference(side, &initial)?;
         Ok(Scene {
             case: self.name(),
@@ -206,6 +208,33 @@ pub trait Case: Sync + std::fmt::Debug {
             energies: self.energies(),
             curve: self.curve(),
         })
+    }
+}
+
+/// How a case places its particles.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Layout {
+    /// Glass where the case starts from one ([`crate::glass`], relaxed
+    /// with `kernel` and the run's neighbour counts, cached in `dir`),
+    /// cubic lattices elsewhere.
+    Glass {
+        /// The run's kernel.
+        kernel: sph_kernels::KernelChoice,
+        /// The glass cache.
+        dir: std::path::PathBuf,
+    },
+    /// Cubic lattices everywhere.
+    Lattice,
+}
+
+impl Default for Layout {
+    /// Glass with the default kernel, cached in
+    /// [`crate::glass::default_cache_dir`].
+    fn default() -> Self {
+        Layout::Glass {
+            kernel: sph_kernels::KernelChoice::default(),
+            dir: crate::glass::default_cache_dir(),
+        }
     }
 }
 

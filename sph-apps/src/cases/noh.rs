@@ -1,7 +1,7 @@
 //! Noh implosion: a sphere of radius 0.5 cut from a lattice, uniform
 //! density, falling inwards at unit speed, open boundaries.
 
-use super::{Listing, cube_lattice, field_set, initial_h, Case, InitialState, Reference, Scheme, Share};
+use super::{Layout, Listing, cube_lattice, field_set, initial_h, Case, InitialState, Reference, Scheme, Share};
 use crate::reference::Noh;
 use crate::AppError;
 use sph_core::HydroConfig;
@@ -52,6 +52,7 @@ impl Case for NohImplosion {
         side: usize,
         config: &HydroConfig,
         share: Share,
+        _layout: &Layout,
     ) -> Result<InitialState, AppError> {
         let pts = sphere(side);
         let n = pts.len();

@@ -2,7 +2,7 @@
 //! does: regular lattice in `[-0.5, 0.5]^3`, rho = 1, gamma = 5/3, E = 1
 //! deposited as a Gaussian of width 0.1, first dt = 1e-6.
 
-use super::{Listing, cube_lattice, field_set, initial_h, Case, InitialState, Reference, Scheme, Share};
+use super::{Layout, Listing, cube_lattice, field_set, initial_h, Case, InitialState, Reference, Scheme, Share};
 use crate::reference::Sedov;
 use crate::AppError;
 use sph_core::HydroConfig;
@@ -43,6 +43,7 @@ impl Case for SedovBlast {
         side: usize,
         config: &HydroConfig,
         share: Share,
+        _layout: &Layout,
     ) -> Result<InitialState, AppError> {
         let n = side * side * side;
         let (mut p, mine) = share.particles(n, field_set(config));

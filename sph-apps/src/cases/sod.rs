@@ -6,24 +6,32 @@
 //! reference is a function of `|x|` ([`Reference::Tube`]). By t = 0.2 the
 //! fans reach `|x| = 0.24` and the shocks `|x| = 0.87`: nothing meets.
 //!
-//! Both gases are cubic lattices of equal-mass particles, the thin one with
-//! twice the spacing (8x less dense); the cross-section is at least 16
-//! spacings of the dense lattice, and wide enough that `2h` of the thin gas
-//! is at most 0.4 of it.
+//! Both gases are made of equal-mass particles, the thin one at twice the
+//! spacing (8x less dense), from one periodic glass block
+//! ([`crate::glass`], `cross/2` particles per side, relaxed with the run's
+//! kernel and neighbour counts) or, with [`Layout::Lattice`], from cubic
+//! lattices; the cross-section is at least 16 spacings of the dense gas,
+//! and wide enough that `2h` of the thin gas is at most 0.4 of it.
+//!
+//! Measured (ng0 = 100, sinc:6, L1 rho / P / v_x at side 40 and 80):
+//! from glass 0.0163 / 0.0182 / 0.0322 and 0.0094 / 0.0109 / 0.0187, the
+//! shock within +1.0% / +0.8% and the contact within -0.6% / -0.2% of their
+//! exact positions. From lattices 0.0301 / 0.0416 / 0.0525 and
+//! 0.0298 / 0.0379 / 0.0459: the expanded dense gas settles about 20% too
+//! dense (P 0.40 against P* = 0.294 at both sides), a lattice effect that
+//! the glass removes.
 //!
 //! The default scheme takes kernel gradients (grad-h and constant alpha = 1
-//! as in the paper's). Measured with the paper's IAD gradients on these
-//! lattices: a spurious compression runs ahead of the rarefaction (peak
-//! density 1.18 at side 40, 1.30 at side 80, with the gas there moving
-//! backwards), so the error grows with resolution; with kernel gradients the
-//! peak is 1.003 and 1.002. At ng0 = 100 with the sinc:6 kernel the
-//! expanded dense gas settles about 20% too dense (P 0.40 against
-//! P* = 0.294, at side 40 and 80 alike: a neighbour-number error, not a
-//! resolution one); ng0 = 200 or the Wendland C4 kernel removes most of it.
+//! as in the paper's). On lattices the paper's IAD gradients set off a
+//! spurious compression ahead of the rarefaction (peak density 1.18 at side
+//! 40, 1.30 at side 80); on glass they do not (1.011 / 1.009) and give
+//! 0.0130 / 0.0154 / 0.0321 and 0.0078 / 0.0100 / 0.0195, but put the shock
+//! 2.1% ahead at side 40.
 
-use super::{
+use super::{Layout, 
     field_set, initial_h, Case, InitialState, Listing, Reference, Scheme, Share, Tube,
 };
+use crate::glass::{self, GlassSpec};
 use crate::reference::{GasState, Riemann};
 use crate::AppError;
 use sph_core::HydroConfig;
@@ -90,6 +98,7 @@ impl Case for SodTube {
         side: usize,
         config: &HydroConfig,
         share: Share,
+        layout: &Layout,
     ) -> Result<InitialState, AppError> {
         if !side.is_multiple_of(2) {
             return Err(AppError::Usage(format!(
@@ -99,30 +108,56 @@ impl Case for SodTube {
         let dx = 1.0 / side as f64;
         let cross = cross_section(config.neighbors.ng0);
         let width = cross as f64 * dx;
-        let n_dense = side * cross * cross;
-        let (thin_x, thin_yz) = (side / 2, cross / 2);
-        let n = n_dense + thin_x * thin_yz * thin_yz;
         let m = DENSE.rho * dx * dx * dx;
         let h_dense = initial_h(config.neighbors.ng0, dx * dx * dx, 1);
         let u = |g: GasState| g.p / ((GAMMA - 1.0) * g.rho);
+        let (thin_x, thin_yz) = (side / 2, cross / 2);
+        let (n, n_dense, placed) = match layout {
+            Layout::Lattice => {
+                let n_dense = side * cross * cross;
+                (n_dense + thin_x * thin_yz * thin_yz, n_dense, None)
+            }
+            Layout::Glass { kernel, dir } => {
+                // One glass block, thin_yz per side: at the thin spacing it
+                // spans the tube's width once, at the dense spacing half of
+                // it, so y and z stay seamless; along x the tiles are cut
+                // at the interfaces. Every rank places all particles and
+                // keeps its share (a Sod tube is small).
+                let spec = GlassSpec {
+                    side: thin_yz,
+                    kernel: *kernel,
+                    ng0: config.neighbors.ng0,
+                    ngmax: config.neighbors.ngmax,
+                };
+                let g = glass::cached(&spec, dir)?;
+                let mut all = g.fill([-INTERFACE, 0.0, 0.0], [INTERFACE, width, width], dx);
+                let n_dense = all.len();
+                let thin = g.fill([INTERFACE, 0.0, 0.0], [INTERFACE + 1.0, width, width], 2.0 * dx);
+                // From x = 0.5 outwards, wrapping through x = 1 = -1.
+                all.extend(thin.into_iter().map(|[x, y, z]| [if x >= 1.0 { x - 2.0 } else { x }, y, z]));
+                (all.len(), n_dense, Some(all))
+            }
+        };
         let (mut p, mine) = share.particles(n, field_set(config));
         for (k, g) in mine.enumerate() {
-            let (q, spacing, gas) = if g < n_dense {
-                let c = [g % side, g / side % cross, g / (side * cross)];
-                let x = -INTERFACE + (c[0] as f64 + 0.5) * dx;
-                ((x, c[1] as f64, c[2] as f64), dx, DENSE)
-            } else {
-                let l = g - n_dense;
-                let c = [l % thin_x, l / thin_x % thin_yz, l / (thin_x * thin_yz)];
-                // From x = 0.5 outwards, wrapping through x = 1 = -1.
-                let mut x = INTERFACE + (c[0] as f64 + 0.5) * 2.0 * dx;
-                if x >= 1.0 {
-                    x -= 2.0;
+            let (spacing, gas) = if g < n_dense { (dx, DENSE) } else { (2.0 * dx, THIN) };
+            let [x, y, z] = match &placed {
+                Some(all) => all[g],
+                None if g < n_dense => {
+                    let c = [g % side, g / side % cross, g / (side * cross)];
+                    [-INTERFACE + (c[0] as f64 + 0.5) * dx, (c[1] as f64 + 0.5) * dx, (c[2] as f64 + 0.5) * dx]
                 }
-                ((x, c[1] as f64, c[2] as f64), 2.0 * dx, THIN)
+                None => {
+                    let l = g - n_dense;
+                    let c = [l % thin_x, l / thin_x % thin_yz, l / (thin_x * thin_yz)];
+                    let mut x = INTERFACE + (c[0] as f64 + 0.5) * 2.0 * dx;
+                    if x >= 1.0 {
+                        x -= 2.0;
+                    }
+                    [x, (c[1] as f64 + 0.5) * 2.0 * dx, (c[2] as f64 + 0.5) * 2.0 * dx]
+                }
             };
-            let (x, cy, cz) = q;
-            (p.x[k], p.y[k], p.z[k]) = (x, (cy + 0.5) * spacing, (cz + 0.5) * spacing);
+            (p.x[k], p.y[k], p.z[k]) = (x, y, z);
             p.m[k] = m;
             p.h[k] = h_dense * spacing / dx;
             p.u[k] = u(gas);

@@ -3,7 +3,7 @@
 //! particle's initial state, initial pressure from the incompressible
 //! Poisson series.
 
-use super::{Listing, field_set, initial_h, Case, InitialState, Physics, Scheme, Share};
+use super::{Layout, Listing, field_set, initial_h, Case, InitialState, Physics, Scheme, Share};
 use crate::AppError;
 use sph_core::{Eos, HydroConfig};
 use sph_tree::{Boundary, BoundingBox};
@@ -78,6 +78,7 @@ impl Case for SquarePatch {
         side: usize,
         config: &HydroConfig,
         share: Share,
+        _layout: &Layout,
     ) -> Result<InitialState, AppError> {
         let n = side * side * side;
         let dx = L / side as f64;

@@ -11,7 +11,7 @@
 //! Both gases are cubic lattices of equal-mass particles, the cloud's
 //! spacing 10^(-1/3) of the wind's.
 
-use super::{field_set, initial_h, Case, Curve, InitialState, Listing, Reference, Scheme, Share};
+use super::{Layout, field_set, initial_h, Case, Curve, InitialState, Listing, Reference, Scheme, Share};
 use crate::AppError;
 use sph_core::{HydroConfig, Particles};
 use sph_tree::{Boundary, BoundingBox};
@@ -76,6 +76,7 @@ impl Case for WindShock {
         side: usize,
         config: &HydroConfig,
         share: Share,
+        _layout: &Layout,
     ) -> Result<InitialState, AppError> {
         if !side.is_multiple_of(4) {
             return Err(AppError::Usage(format!(
