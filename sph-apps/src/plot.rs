@@ -350,12 +350,19 @@ const SERIES_COLORS: [RGBColor; 8] = [
     RGBColor(23, 190, 207),
 ];
 
+/// Colours of the reference series (none of them one of ours).
+const REFERENCE_COLORS: [RGBColor; 3] = [
+    RGBColor(0, 0, 0),
+    RGBColor(188, 189, 34),
+    RGBColor(127, 127, 127),
+];
+
 /// Writes `error_vs_time.png`: one panel per L1 field (side by side), L1
 /// against wall time on log-log axes; one line per series of `runs` (case,
 /// scheme, kernel; the median over repeats at each size, each point
 /// labelled with the side N^(1/3)) with its fitted order in the legend,
 /// and the points of `reference` (another code's, same columns) as hollow
-/// squares of their own colours.
+/// squares in colours of their own; the legend sits above the lines.
 pub fn bench_png(
     path: &Path,
     title: &str,
@@ -456,8 +463,13 @@ fn render_bench(
     let body = root.titled(title, (FAMILY, 26))?;
     let all = || runs.iter().chain(reference);
     let (x_lo, x_hi) = log_range(all().map(|r| r.wall_s));
+    // The legend gets the top of each panel to itself: the y range grows
+    // upwards by its share of the height (about 21 px a line of ~540).
+    let entries = bench_lines(runs, "l1_rho").len() + bench_lines(reference, "l1_rho").len();
+    let legend_share = ((entries as f64 * 21.0 + 16.0) / 540.0).min(0.5);
     for ((field, label), area) in fields.iter().zip(body.split_evenly((1, fields.len()))) {
         let (y_lo, y_hi) = log_range(all().map(|r| r.l1(field)));
+        let y_hi = y_hi * (y_hi / y_lo).powf(legend_share / (1.0 - legend_share));
         let mut chart = ChartBuilder::on(&area)
             .margin(8)
             .margin_right(16)
@@ -520,7 +532,7 @@ fn render_bench(
                 continue;
             }
             any = true;
-            let colour = SERIES_COLORS[(k + 4) % SERIES_COLORS.len()];
+            let colour = REFERENCE_COLORS[k % REFERENCE_COLORS.len()];
             chart
                 .draw_series(LineSeries::new(
                     pts.iter().map(|p| (p.1, p.2)),
