@@ -363,7 +363,7 @@ pub fn write(glass: &Glass, path: &Path) -> Result<(), AppError> {
     Ok(())
 }
 
-/// Reads a glass written by [`write`], checking that it is one of `spec`.
+/// Reads a glass written by [`write()`], checking that it is one of `spec`.
 ///
 /// # Errors
 /// An unreadable or corrupted file, or a glass of another spec.
