@@ -27,8 +27,10 @@ use std::time::{Duration, Instant};
 /// Particles per side and steps of each run: (case, side, steps). Every
 /// registered case runs (with [`DEFAULT_SIZE`] unless listed here), then
 /// the test-only `drift` case.
-const SIZES: [(&str, usize, u64); 6] = [
+const SIZES: [(&str, usize, u64); 7] = [
     ("sedov", 24, 20),
+    // Its box is 0.25 across: 32 per unit length gives the kernel room.
+    ("wind-shock", 32, 20),
     ("sedov-ve", 24, 20),
     ("square-patch", 20, 20),
     ("noh", 20, 20),
