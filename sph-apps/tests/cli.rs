@@ -257,3 +257,9 @@ fn a_build_without_mpi_refuses_more_than_one_rank() {
     assert_mentions(&stderr, &["one of 2 MPI ranks", "without MPI"]);
     assert!(!dir.join("launched").join("conserved.csv").exists());
 }
+
+#[test]
+fn a_wind_shock_box_too_thin_for_the_kernel_is_refused_with_the_least_size() {
+    let e = refused(&["wind-shock", "-n", "16", "--steps", "1", "-q"]);
+    assert_mentions(&e, &["wind-shock", "16", "ng0 = 100", "-n 28"]);
+}

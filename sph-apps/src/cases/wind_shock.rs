@@ -83,6 +83,18 @@ impl Case for WindShock {
                 "case wind-shock: {side} particles per unit length; it must be a multiple of 4 (the box is 1 x 0.25 x 0.25)"
             )));
         }
+        // The kernel's support (2h, in spacings of the wind) must stay
+        // inside half the 0.25-wide box, with 10% to spare for h to grow.
+        let support = 2.0 * initial_h(config.neighbors.ng0, 1.0, 1);
+        let least = ((8.0 * 1.1 * support).ceil() as usize).next_multiple_of(4);
+        if side < least {
+            return Err(AppError::Usage(format!(
+                "case wind-shock: {side} particles per unit length puts {} across the 0.25-wide box, \
+                 too few for ng0 = {}; give -n {least} or more (or a smaller --ng0)",
+                side / 4,
+                config.neighbors.ng0
+            )));
+        }
         let d = 1.0 / side as f64;
         let dc = d * (RHO_WIND / RHO_CLOUD).cbrt();
         let dist = |q: [f64; 3]| {
