@@ -232,11 +232,8 @@ pub fn relax(
     }
     let mut bbox = BoundingBox::new([0.0; 3], [1.0; 3], [Boundary::Periodic; 3])?;
     let kernel: Tabulated = spec.kernel.tabulate(Tabulated::DEFAULT_POINTS)?;
-    let gamma = match Physics::IDEAL_GAS.eos {
-        sph_core::Eos::IdealGas { gamma } => gamma,
-        _ => 5.0 / 3.0,
-    };
-    let sound = (gamma * (gamma - 1.0) * U).sqrt();
+    // The gas's sound speed at the mean density (the same everywhere at rho 1).
+    let (_, sound) = Physics::IDEAL_GAS.eos.pressure_sound(1.0, U);
     let mut hydro = Hydro::new(kernel, config, 0.0, 0.2 * h0 / sound)?;
     hydro.prepare(&mut p);
 

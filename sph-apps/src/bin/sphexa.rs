@@ -597,15 +597,21 @@ fn main() -> ExitCode {
     }
 }
 
-/// `sphexa glass`: relax a block, report, write it.
-fn glass(a: GlassArgs) -> Result<(), AppError> {
-    use sph_apps::glass::{default_cache_dir, relax, write, GlassSpec};
-    if let Some(t) = a.threads {
+/// The global worker pool with `threads` threads (default: all cores).
+fn start_threads(threads: Option<usize>) -> Result<(), AppError> {
+    if let Some(t) = threads {
         rayon::ThreadPoolBuilder::new()
             .num_threads(t)
             .build_global()
             .map_err(|e| AppError::Usage(format!("cannot start {t} threads: {e}")))?;
     }
+    Ok(())
+}
+
+/// `sphexa glass`: relax a block, report, write it.
+fn glass(a: GlassArgs) -> Result<(), AppError> {
+    use sph_apps::glass::{default_cache_dir, relax, write, GlassSpec};
+    start_threads(a.threads)?;
     let spec = GlassSpec {
         side: a.side,
         kernel: a.kernel,
@@ -654,12 +660,7 @@ fn glass(a: GlassArgs) -> Result<(), AppError> {
 
 /// `sphexa stress`: the suite, its table, and whether every scenario passed.
 fn stress(a: StressArgs) -> Result<bool, AppError> {
-    if let Some(t) = a.threads {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(t)
-            .build_global()
-            .map_err(|e| AppError::Usage(format!("cannot start {t} threads: {e}")))?;
-    }
+    start_threads(a.threads)?;
     let out = a.out.unwrap_or_else(|| PathBuf::from("out/stress"));
     let outcomes = sph_apps::stress::run_suite(&sph_apps::stress::Options {
         quick: a.quick,
@@ -1438,12 +1439,7 @@ fn run(a: RunArgs) -> Result<(), AppError> {
             out.display()
         ))
     })?;
-    if let Some(t) = a.threads {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(t)
-            .build_global()
-            .map_err(|e| AppError::Usage(format!("cannot start {t} threads: {e}")))?;
-    }
+    start_threads(a.threads)?;
     let kernel_choice = a.kernel;
     let kernel: Tabulated = kernel_choice.tabulate(Tabulated::DEFAULT_POINTS)?;
 

@@ -11,7 +11,7 @@
 //! smoothed profile is resolved without stretching the lattice.
 
 use super::{Layout, 
-    field_set, initial_h, Case, Curve, InitialState, Listing, Reference, Scheme, Share,
+    field_set, initial_h, Case, Curve, InitialState, Listing, Scheme, Share,
 };
 use crate::AppError;
 use sph_core::{HydroConfig, Particles};
@@ -135,14 +135,6 @@ impl Case for KelvinHelmholtz {
             )?,
             dt0: 1e-4 * 64.0 * dx,
         })
-    }
-
-    fn reference(
-        &self,
-        _side: usize,
-        _initial: &InitialState,
-    ) -> Result<Option<Reference>, AppError> {
-        Ok(None)
     }
 
     fn curve(&self) -> Option<Curve> {

@@ -11,7 +11,7 @@
 //! Both gases are cubic lattices of equal-mass particles, the cloud's
 //! spacing 10^(-1/3) of the wind's.
 
-use super::{Layout, field_set, initial_h, Case, Curve, InitialState, Listing, Reference, Scheme, Share};
+use super::{Layout, field_set, initial_h, Case, Curve, InitialState, Listing, Scheme, Share};
 use crate::AppError;
 use sph_core::{HydroConfig, Particles};
 use sph_tree::{Boundary, BoundingBox};
@@ -142,14 +142,6 @@ impl Case for WindShock {
             bbox: BoundingBox::new([0.0; 3], BOX, [Boundary::Periodic; 3])?,
             dt0: 1e-5 * 64.0 * d,
         })
-    }
-
-    fn reference(
-        &self,
-        _side: usize,
-        _initial: &InitialState,
-    ) -> Result<Option<Reference>, AppError> {
-        Ok(None)
     }
 
     fn curve(&self) -> Option<Curve> {
