@@ -39,7 +39,7 @@ use sph_core::{Gradients, Hydro, HydroConfig, Particles, Scheme};
 use sph_io::{
     Attr, BoxSpec, FieldData, H5Part, Selection, Snapshot, SnapshotReader, SnapshotWriter,
 };
-use sph_kernels::{KernelChoice, Tabulated};
+use sph_kernels::{FastKernel, KernelChoice};
 use sph_tree::{Boundary, BoundingBox};
 use std::path::{Path, PathBuf};
 
@@ -231,7 +231,7 @@ pub fn relax(
         p.u[i] = U;
     }
     let mut bbox = BoundingBox::new([0.0; 3], [1.0; 3], [Boundary::Periodic; 3])?;
-    let kernel: Tabulated = spec.kernel.tabulate(Tabulated::DEFAULT_POINTS)?;
+    let kernel: FastKernel = spec.kernel.fast()?;
     // The gas's sound speed at the mean density (the same everywhere at rho 1).
     let (_, sound) = Physics::IDEAL_GAS.eos.pressure_sound(1.0, U);
     let mut hydro = Hydro::new(kernel, config, 0.0, 0.2 * h0 / sound)?;

@@ -8,7 +8,7 @@
 //!
 //! // The case applies its own scheme; `HydroConfig` carries the rest.
 //! let scene = cases::lookup("sedov")?.setup(20, HydroConfig::default())?;
-//! let kernel = KernelChoice::default().tabulate(20_000)?;
+//! let kernel = KernelChoice::default().fast()?;
 //! let mut sim = Simulation::new(scene, kernel, "sinc:6".into())?;
 //! let summary = sim.run(Stop::Time(0.01), std::path::Path::new("out/sedov"), Progress::Quiet)?;
 //! println!("L1(rho) = {:?}", summary.l1);

@@ -22,7 +22,7 @@ use sph_comm::{Communicator, ReduceOp, SerialComm};
 use sph_core::{Conserved, Hydro, RunState};
 use sph_domain::DomainConfig;
 use sph_io::{Attr, Snapshot};
-use sph_kernels::Tabulated;
+use sph_kernels::FastKernel;
 use std::path::Path;
 use std::time::Instant;
 
@@ -74,6 +74,9 @@ pub struct Summary {
     pub threads: usize,
     /// Kernel used.
     pub kernel: String,
+    /// How the solver evaluates it (`polynomial of degree 16 in v^2`,
+    /// `table of 20000 points`).
+    pub kernel_form: String,
     /// Mean neighbour count of the last step (self included).
     pub neighbors_mean: f64,
     /// Mean seconds per stage over steps 2..N.
@@ -213,7 +216,7 @@ pub struct DomainSummary {
 #[derive(Debug)]
 pub struct Simulation<C: Communicator = SerialComm> {
     scene: Scene,
-    hydro: Hydro<Tabulated, C>,
+    hydro: Hydro<FastKernel, C>,
     kernel_name: String,
     total: usize,
     write_particles: bool,
@@ -225,7 +228,7 @@ pub struct Simulation<C: Communicator = SerialComm> {
 impl Simulation {
     /// Assembles the serial pipeline the scene needs with the given kernel
     /// table.
-    pub fn new(scene: Scene, kernel: Tabulated, kernel_name: String) -> Result<Self, AppError> {
+    pub fn new(scene: Scene, kernel: FastKernel, kernel_name: String) -> Result<Self, AppError> {
         Simulation::with_comm(scene, kernel, kernel_name, SerialComm::new())
     }
 }
@@ -240,7 +243,7 @@ impl<C: Communicator> Simulation<C> {
     /// A scene holding neither all particles nor this rank's share.
     pub fn with_comm(
         scene: Scene,
-        kernel: Tabulated,
+        kernel: FastKernel,
         kernel_name: String,
         comm: C,
     ) -> Result<Self, AppError> {
@@ -254,7 +257,7 @@ impl<C: Communicator> Simulation<C> {
     /// output folder keeps its lines up to the checkpoint's step.
     pub fn resume(
         scene: Scene,
-        kernel: Tabulated,
+        kernel: FastKernel,
         kernel_name: String,
         comm: C,
         state: RunState,
@@ -264,7 +267,7 @@ impl<C: Communicator> Simulation<C> {
 
     fn build(
         scene: Scene,
-        kernel: Tabulated,
+        kernel: FastKernel,
         kernel_name: String,
         comm: C,
         resume: Option<RunState>,
@@ -537,6 +540,7 @@ impl<C: Communicator> Simulation<C> {
             bytes_per_particle: per_particle(end.buffer_bytes as f64),
             threads: rayon::current_num_threads(),
             kernel: self.kernel_name.clone(),
+            kernel_form: self.hydro.kernel().describe(),
             neighbors_mean: neighbors_total.map_or(0.0, |t| per_particle(t as f64)),
             stage_seconds: totals.stage_seconds(),
             dt_limits: totals.dt_limits(),
@@ -877,9 +881,7 @@ mod tests {
             std::process::id()
         ));
         let summaries = run_ranks(ranks, |comm| {
-            let kernel = KernelChoice::default()
-                .tabulate(Tabulated::DEFAULT_POINTS)
-                .expect("kernel");
+            let kernel = KernelChoice::default().fast().expect("kernel");
             let mut sim = Simulation::with_comm(scene(case), kernel, "default".into(), comm)
                 .expect("pipeline");
             sim.set_write_particles(true);

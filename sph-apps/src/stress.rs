@@ -17,7 +17,7 @@ use crate::simulation::{Progress, Stop};
 use crate::{AppError, Simulation, Summary};
 use serde::Serialize;
 use sph_core::HydroConfig;
-use sph_kernels::{KernelChoice, Tabulated};
+use sph_kernels::KernelChoice;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -85,7 +85,7 @@ fn run(
 ) -> (Result<Summary, AppError>, f64) {
     let start = Instant::now();
     let result = kernel
-        .tabulate(Tabulated::DEFAULT_POINTS)
+        .fast()
         .map_err(AppError::from)
         .and_then(|k| Simulation::new(scene, k, kernel.to_string()))
         .and_then(|mut sim| sim.run(stop, dir, Progress::Quiet));

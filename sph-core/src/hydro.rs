@@ -442,6 +442,11 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         &self.config
     }
 
+    /// The kernel the pair stages evaluate.
+    pub fn kernel(&self) -> &K {
+        &self.kernel
+    }
+
     /// Current time.
     pub fn time(&self) -> f64 {
         self.t

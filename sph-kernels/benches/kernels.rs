@@ -1,4 +1,4 @@
-//! Per-evaluation cost of exact kernels vs lookup tables.
+//! Per-evaluation cost of exact kernels vs lookup tables and polynomial fits.
 //!
 //! Each iteration evaluates `shape_and_derivative` at 1e6 pseudo-random
 //! distances in [0, 2] (precomputed), so ns per evaluation = time / 1e6;
@@ -12,7 +12,7 @@ use std::time::Duration;
 
 use criterion::measurement::WallTime;
 use criterion::{criterion_group, criterion_main, BenchmarkGroup, Criterion, Throughput};
-use sph_kernels::{CubicSpline, Kernel, Sinc, Tabulated, WendlandC2};
+use sph_kernels::{CubicSpline, F64s, Kernel, Polynomial, Sinc, Tabulated, WendlandC2, LANES};
 
 const EVALUATIONS: usize = 1_000_000;
 
@@ -40,6 +40,18 @@ fn sweep<K: Kernel>(kernel: &K, vs: &[f64]) -> f64 {
     acc
 }
 
+/// The lane form over all distances, [`LANES`] at a time: what the pair
+/// loops call.
+fn sweep_lanes<K: Kernel>(kernel: &K, vs: &[f64]) -> f64 {
+    let mut acc = F64s::splat(0.0);
+    for chunk in vs.chunks_exact(LANES) {
+        let v = F64s::from_array(chunk.try_into().expect("a lane"));
+        let (w, dw) = kernel.shape_and_derivative_lanes(black_box(v));
+        acc += w + dw;
+    }
+    acc.sum()
+}
+
 fn bench<K: Kernel>(group: &mut BenchmarkGroup<'_, WallTime>, name: &str, kernel: &K, vs: &[f64]) {
     group.bench_function(name, |b| b.iter(|| black_box(sweep(kernel, vs))));
 }
@@ -64,6 +76,14 @@ fn sinc6(c: &mut Criterion) {
     // A table that fits in L1 shows how much of the cost is cache traffic.
     let small = Tabulated::new(&exact, 2_000).unwrap();
     bench(&mut group, "table-2000-points", &small, &vs);
+    let poly = Polynomial::fit(&exact, 1e-9).unwrap();
+    bench(&mut group, "polynomial", &poly, &vs);
+    group.bench_function("table-lanes", |b| {
+        b.iter(|| black_box(sweep_lanes(&table, &vs)))
+    });
+    group.bench_function("polynomial-lanes", |b| {
+        b.iter(|| black_box(sweep_lanes(&poly, &vs)))
+    });
     group.finish();
 }
 

@@ -4,7 +4,8 @@ use std::fmt;
 use std::str::FromStr;
 
 use crate::{
-    CubicSpline, Kernel, KernelError, Sinc, Tabulated, WendlandC2, WendlandC4, WendlandC6,
+    CubicSpline, FastKernel, Kernel, KernelError, Sinc, Tabulated, WendlandC2, WendlandC4,
+    WendlandC6,
 };
 
 /// A built-in kernel, as named on a command line.
@@ -72,6 +73,15 @@ impl KernelChoice {
     /// As [`exact`](Self::exact) and [`Tabulated::new`].
     pub fn tabulate(&self, points: usize) -> Result<Tabulated, KernelError> {
         Tabulated::new(&self.exact()?, points)
+    }
+
+    /// The kernel in the form the solver evaluates it: a polynomial where
+    /// one is faithful, else the table ([`FastKernel::new`]).
+    ///
+    /// # Errors
+    /// As [`exact`](Self::exact) and [`FastKernel::new`].
+    pub fn fast(&self) -> Result<FastKernel, KernelError> {
+        FastKernel::new(&self.exact()?)
     }
 }
 

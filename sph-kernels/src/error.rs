@@ -54,6 +54,16 @@ pub enum KernelError {
         dw: f64,
     },
 
+    /// No polynomial up to the largest degree reproduces the kernel to the
+    /// asked accuracy ([`crate::Polynomial::fit`]).
+    #[error("no polynomial of degree <= {max_degree} reproduces the kernel to {tolerance:e} of its scale")]
+    NoPolynomialFit {
+        /// The relative accuracy asked for.
+        tolerance: f64,
+        /// The largest degree tried.
+        max_degree: usize,
+    },
+
     /// A kernel name that [`crate::KernelChoice`] does not know.
     #[error("unknown kernel \"{name}\"; allowed: {allowed}")]
     UnknownKernel {

@@ -76,9 +76,11 @@
 
 mod choice;
 mod error;
+mod fast;
 mod gauss;
 mod kernel;
 pub mod lanes;
+mod poly;
 mod sinc;
 mod spline;
 mod table;
@@ -86,8 +88,10 @@ mod wendland;
 
 pub use choice::KernelChoice;
 pub use error::KernelError;
+pub use fast::FastKernel;
 pub use kernel::{normalisation, Kernel, LANES};
 pub use lanes::{F64s, Lane, Mask};
+pub use poly::{FitVariable, Polynomial};
 pub use sinc::Sinc;
 pub use spline::CubicSpline;
 pub use table::Tabulated;

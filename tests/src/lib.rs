@@ -4,14 +4,12 @@
 use sph_apps::cases::Scene;
 use sph_apps::simulation::{Progress, Stop};
 use sph_apps::{Simulation, Summary};
-use sph_kernels::{KernelChoice, Tabulated};
+use sph_kernels::{FastKernel, KernelChoice};
 
 /// Runs `scene` with the default kernel until `stop`, writing outputs into
 /// `out`, and returns the summary.
 pub fn run(scene: Scene, stop: Stop, out: &std::path::Path) -> Summary {
-    let kernel: Tabulated = KernelChoice::default()
-        .tabulate(Tabulated::DEFAULT_POINTS)
-        .expect("default kernel");
+    let kernel: FastKernel = KernelChoice::default().fast().expect("default kernel");
     let mut sim = Simulation::new(scene, kernel, KernelChoice::default().to_string())
         .expect("simulation set-up");
     sim.run(stop, out, Progress::Quiet).expect("run completes")
@@ -19,9 +17,7 @@ pub fn run(scene: Scene, stop: Stop, out: &std::path::Path) -> Summary {
 
 /// As [`run`], also writing `particles.csv` (the final state) to `out`.
 pub fn run_writing_particles(scene: Scene, stop: Stop, out: &std::path::Path) -> Summary {
-    let kernel: Tabulated = KernelChoice::default()
-        .tabulate(Tabulated::DEFAULT_POINTS)
-        .expect("default kernel");
+    let kernel: FastKernel = KernelChoice::default().fast().expect("default kernel");
     let mut sim = Simulation::new(scene, kernel, KernelChoice::default().to_string())
         .expect("simulation set-up");
     sim.set_write_particles(true);

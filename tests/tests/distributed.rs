@@ -19,7 +19,7 @@ use sph_apps::simulation::{Progress, Stop};
 use sph_apps::Simulation;
 use sph_comm::{Communicator, MpiComm, SerialComm};
 use sph_core::HydroConfig;
-use sph_kernels::{KernelChoice, Tabulated};
+use sph_kernels::{FastKernel, KernelChoice};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -128,9 +128,7 @@ fn child(mode: &str, case: &str, out: &Path, threads: usize) {
         .build_global()
         .expect("thread pool");
     let steps = runs().into_iter().find(|c| c.0 == case).expect("case").2;
-    let kernel: Tabulated = KernelChoice::default()
-        .tabulate(Tabulated::DEFAULT_POINTS)
-        .expect("kernel");
+    let kernel: FastKernel = KernelChoice::default().fast().expect("kernel");
     let name = KernelChoice::default().to_string();
     let mut rank = 0;
     let summary = if mode == "mpi" {

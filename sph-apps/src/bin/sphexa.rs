@@ -14,7 +14,7 @@ use sph_apps::{AppError, Simulation};
 use sph_comm::Communicator;
 use sph_core::PRESETS;
 use sph_core::{Gradients, HydroConfig};
-use sph_kernels::{KernelChoice, Tabulated};
+use sph_kernels::{FastKernel, KernelChoice};
 use sph_tree::Curve;
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
@@ -1441,7 +1441,7 @@ fn run(a: RunArgs) -> Result<(), AppError> {
     })?;
     start_threads(a.threads)?;
     let kernel_choice = a.kernel;
-    let kernel: Tabulated = kernel_choice.tabulate(Tabulated::DEFAULT_POINTS)?;
+    let kernel: FastKernel = kernel_choice.fast()?;
 
     let mut config = HydroConfig {
         curve: match a.curve {

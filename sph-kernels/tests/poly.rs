@@ -1,0 +1,103 @@
+//! The polynomial form of the kernels: faithful to the exact kernel within
+//! the fit's tolerance everywhere on the support, lanes equal to scalars,
+//! and the fallback to the table where no polynomial fits.
+
+use proptest::prelude::*;
+use sph_kernels::{
+    F64s, FastKernel, FitVariable, Kernel, KernelChoice, KernelError, Polynomial, Sinc, LANES,
+};
+
+/// Every built-in choice, sinc with integer and non-integer exponents.
+fn any_choice() -> impl Strategy<Value = KernelChoice> {
+    prop_oneof![
+        (3u32..=12).prop_map(|n| KernelChoice::Sinc(f64::from(n))),
+        (3.0f64..=12.0).prop_map(KernelChoice::Sinc),
+        Just(KernelChoice::CubicSpline),
+        Just(KernelChoice::WendlandC2),
+        Just(KernelChoice::WendlandC4),
+        Just(KernelChoice::WendlandC6),
+    ]
+}
+
+/// The largest |w| and |w'| over the support, on a grid finer than the
+/// fit's own check.
+fn scales(k: &dyn Kernel) -> (f64, f64) {
+    (0..20_000).fold((0.0f64, 0.0f64), |(a, b), i| {
+        let (w, dw) = k.shape_and_derivative(2.0 * f64::from(i) / 20_000.0);
+        (a.max(w.abs()), b.max(dw.abs()))
+    })
+}
+
+#[test]
+fn the_default_kernel_is_a_polynomial_in_v_squared() {
+    let fast = KernelChoice::default().fast().unwrap();
+    let FastKernel::Polynomial(p) = &fast else {
+        panic!("sinc:6 should fit: {fast:?}");
+    };
+    assert_eq!(p.variable(), FitVariable::Square);
+    assert_eq!(
+        fast.describe(),
+        format!("polynomial of degree {} in v^2", p.degree())
+    );
+}
+
+#[test]
+fn m4_falls_back_to_the_table() {
+    assert!(matches!(
+        Polynomial::fit(&sph_kernels::CubicSpline, FastKernel::TOLERANCE),
+        Err(KernelError::NoPolynomialFit { .. })
+    ));
+    let fast = KernelChoice::CubicSpline.fast().unwrap();
+    assert_eq!(fast.describe(), "table of 20000 points");
+}
+
+#[test]
+fn a_tolerance_no_degree_reaches_is_an_error_naming_it() {
+    let e = Polynomial::fit(&Sinc::new(6.0).unwrap(), 1e-17).unwrap_err();
+    assert!(e.to_string().contains("1e-17"), "{e}");
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// Within the tolerance of the scale everywhere on the support, not only
+    /// at the fit's check points (1.5x margin for points between them).
+    #[test]
+    fn fast_form_matches_exact(choice in any_choice(), v in 0.0f64..2.0) {
+        let exact = choice.exact().unwrap();
+        let fast = choice.fast().unwrap();
+        let (sw, sdw) = scales(exact.as_ref());
+        let (w, dw) = exact.shape_and_derivative(v);
+        let (fw, fdw) = fast.shape_and_derivative(v);
+        // The table's own bound (tests/table.rs) where it is used.
+        let tol = match fast {
+            FastKernel::Polynomial(_) => 1.5 * FastKernel::TOLERANCE,
+            FastKernel::Table(_) => 1e-7,
+        };
+        prop_assert!((fw - w).abs() <= tol * sw, "{choice} v = {v}: {fw} vs {w}");
+        prop_assert!((fdw - dw).abs() <= tol * sdw, "{choice} v = {v}: {fdw} vs {dw}");
+        prop_assert_eq!(fast.shape(2.0 + v), 0.0);
+    }
+
+    /// Lanes are the scalar forms bit for bit, in and out of range.
+    #[test]
+    fn lanes_equal_scalar_bit_for_bit(
+        choice in any_choice(),
+        v in proptest::array::uniform8(prop_oneof![
+            4 => 0.0f64..2.2,
+            1 => prop::num::f64::ANY,
+        ]),
+    ) {
+        let k = choice.fast().unwrap();
+        let lanes = F64s::from_array(v);
+        let w = k.shape_lanes(lanes).to_array();
+        let (w2, dw) = k.shape_and_derivative_lanes(lanes);
+        let (w2, dw) = (w2.to_array(), dw.to_array());
+        for l in 0..LANES {
+            let (sw, sdw) = k.shape_and_derivative(v[l]);
+            prop_assert_eq!(w[l].to_bits(), k.shape(v[l]).to_bits(), "v = {}", v[l]);
+            prop_assert_eq!(w2[l].to_bits(), sw.to_bits(), "v = {}", v[l]);
+            prop_assert_eq!(dw[l].to_bits(), sdw.to_bits(), "v = {}", v[l]);
+        }
+    }
+}
