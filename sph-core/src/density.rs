@@ -38,26 +38,31 @@ pub fn density<K: Kernel>(
     let driver = PairLoop::new(bbox, kernel.support(), [pos.x, pos.y, pos.z], pos.h, nl)
         .expect("density: positions");
     let targets = nl.targets();
-    let omega = (!omega.is_empty()).then(|| [&mut omega[targets.clone()]]);
-    let stage = Density {
-        kernel,
-        norm: kernel.norm(),
-        h: pos.h,
-        m: &pos.m[..pos.x.len()],
-    };
-    driver.run(&stage, ([&mut rho[targets]], omega));
+    let m = &pos.m[..pos.x.len()];
+    let (norm, h) = (kernel.norm(), pos.h);
+    if omega.is_empty() {
+        let stage = Density::<K, false> { kernel, norm, h, m };
+        driver.run(&stage, ([&mut rho[targets]], None));
+    } else {
+        let stage = Density::<K, true> { kernel, norm, h, m };
+        driver.run(
+            &stage,
+            ([&mut rho[targets.clone()]], Some([&mut omega[targets]])),
+        );
+    }
 }
 
 /// The density sums: partners beyond 2 h_i add W = 0, so each lane is the
-/// scalar sum over its list.
-struct Density<'a, K> {
+/// scalar sum over its list. Without `GRAD_H` the kernel derivative is not
+/// evaluated (the density bits are the same either way).
+struct Density<'a, K, const GRAD_H: bool> {
     kernel: &'a K,
     norm: f64,
     h: &'a [f64],
     m: &'a [f64],
 }
 
-impl<K: Kernel> PairStage for Density<'_, K> {
+impl<K: Kernel, const GRAD_H: bool> PairStage for Density<'_, K, GRAD_H> {
     /// `1/h`, `sum m W`, `sum m (3 w + v w')`.
     type Sums = (F64s, F64s, F64s);
     type Out<'o> = ([&'o mut [f64]; 1], Option<[&'o mut [f64]; 1]>);
@@ -72,9 +77,13 @@ impl<K: Kernel> PairStage for Density<'_, K> {
     #[inline(always)]
     fn pair(&self, (inv_h, sum_w, sum_dh): &mut Self::Sums, j: usize, _: [F64s; 3], r2: F64s) {
         let v = r2.sqrt() * *inv_h;
-        let (w, dw) = self.kernel.shape_and_derivative_lanes(v);
-        *sum_w += self.m[j] * w;
-        *sum_dh += self.m[j] * (3.0 * w + v * dw);
+        if GRAD_H {
+            let (w, dw) = self.kernel.shape_and_derivative_lanes(v);
+            *sum_w += self.m[j] * w;
+            *sum_dh += self.m[j] * (3.0 * w + v * dw);
+        } else {
+            *sum_w += self.m[j] * self.kernel.shape_lanes(v);
+        }
     }
 
     #[inline(always)]
@@ -153,23 +162,40 @@ pub fn ve_density<K: Kernel>(
         .expect("ve density: positions");
     let n = pos.x.len();
     let targets = nl.targets();
-    let omega = (!out.omega.is_empty()).then(|| [&mut out.omega[targets.clone()]]);
-    let stage = VeDensity {
-        kernel,
-        norm: kernel.norm(),
-        w0: kernel.shape(0.0),
-        h: pos.h,
-        m: &pos.m[..n],
-        xm: &xm[..n],
-    };
-    driver.run(
-        &stage,
-        ([&mut out.kx[targets.clone()], &mut out.rho[targets]], omega),
+    let (norm, w0, h, m, xm) = (
+        kernel.norm(),
+        kernel.shape(0.0),
+        pos.h,
+        &pos.m[..n],
+        &xm[..n],
     );
+    let kx_rho = [&mut out.kx[targets.clone()], &mut out.rho[targets.clone()]];
+    if out.omega.is_empty() {
+        let stage = VeDensity::<K, false> {
+            kernel,
+            norm,
+            w0,
+            h,
+            m,
+            xm,
+        };
+        driver.run(&stage, (kx_rho, None));
+    } else {
+        let stage = VeDensity::<K, true> {
+            kernel,
+            norm,
+            w0,
+            h,
+            m,
+            xm,
+        };
+        driver.run(&stage, (kx_rho, Some([&mut out.omega[targets]])));
+    }
 }
 
-/// The sums of the volume-element normalisation and its h-derivative.
-struct VeDensity<'a, K> {
+/// The sums of the volume-element normalisation and, with `GRAD_H`, its
+/// h-derivative.
+struct VeDensity<'a, K, const GRAD_H: bool> {
     kernel: &'a K,
     norm: f64,
     /// The kernel shape at 0 (1 for the sinc family).
@@ -179,7 +205,7 @@ struct VeDensity<'a, K> {
     xm: &'a [f64],
 }
 
-impl<K: Kernel> PairStage for VeDensity<'_, K> {
+impl<K: Kernel, const GRAD_H: bool> PairStage for VeDensity<'_, K, GRAD_H> {
     /// `1/h`, `sum X w`, `sum X (3 w + v w')`, `sum m (3 w + v w')`.
     type Sums = (F64s, F64s, F64s, F64s);
     type Out<'o> = ([&'o mut [f64]; 2], Option<[&'o mut [f64]; 1]>);
@@ -194,11 +220,15 @@ impl<K: Kernel> PairStage for VeDensity<'_, K> {
     #[inline(always)]
     fn pair(&self, (inv_h, sk, sx, sm): &mut Self::Sums, j: usize, _: [F64s; 3], r2: F64s) {
         let v = r2.sqrt() * *inv_h;
-        let (w, dw) = self.kernel.shape_and_derivative_lanes(v);
-        let dh = 3.0 * w + v * dw;
-        *sk += self.xm[j] * w;
-        *sx += self.xm[j] * dh;
-        *sm += self.m[j] * dh;
+        if GRAD_H {
+            let (w, dw) = self.kernel.shape_and_derivative_lanes(v);
+            let dh = 3.0 * w + v * dw;
+            *sk += self.xm[j] * w;
+            *sx += self.xm[j] * dh;
+            *sm += self.m[j] * dh;
+        } else {
+            *sk += self.xm[j] * self.kernel.shape_lanes(v);
+        }
     }
 
     #[inline(always)]

@@ -205,15 +205,33 @@ impl fmt::Debug for Polynomial {
     }
 }
 
-/// `sum c[k] t^k` over the first `terms` coefficients by Horner's rule
-/// (separate multiply and add, as the lane form).
+/// `sum c[k] t^k` over the first `terms` coefficients: the even and odd
+/// halves by Horner's rule in `t^2` as two independent chains (half the
+/// latency of one chain; the pair loops are latency-bound), then
+/// `even + t odd`. Scalar and lane forms run the same operations.
 #[inline(always)]
 fn horner(c: &[f64; MAX_TERMS], terms: usize, t: f64) -> f64 {
-    let mut acc = c[terms - 1];
-    for &ck in c[..terms - 1].iter().rev() {
-        acc = mul_add(acc, t, ck);
+    let top = terms - 1;
+    if top == 0 {
+        return c[0];
     }
-    acc
+    let t2 = t * t;
+    // Highest even and odd indices.
+    let (mut e, mut o) = if top.is_multiple_of(2) {
+        (top, top - 1)
+    } else {
+        (top - 1, top)
+    };
+    let (mut even, mut odd) = (c[e], c[o]);
+    while e >= 2 {
+        e -= 2;
+        even = mul_add(even, t2, c[e]);
+    }
+    while o >= 2 {
+        o -= 2;
+        odd = mul_add(odd, t2, c[o]);
+    }
+    mul_add(odd, t, even)
 }
 
 /// `a b + c`: fused where the build targets FMA (then the lane form fuses
@@ -228,9 +246,9 @@ fn mul_add(a: f64, b: f64, c: f64) -> f64 {
 }
 
 #[inline(always)]
-fn mul_add_lanes(a: F64s, b: F64s, c: f64) -> F64s {
+fn mul_add_lanes(a: F64s, b: F64s, c: F64s) -> F64s {
     if cfg!(target_feature = "fma") {
-        F64s(a.0.mul_add(b.0, wide::f64x8::splat(c)))
+        F64s(a.0.mul_add(b.0, c.0))
     } else {
         a * b + c
     }
@@ -238,11 +256,26 @@ fn mul_add_lanes(a: F64s, b: F64s, c: f64) -> F64s {
 
 #[inline(always)]
 fn horner_lanes(c: &[f64; MAX_TERMS], terms: usize, t: F64s) -> F64s {
-    let mut acc = F64s::splat(c[terms - 1]);
-    for &ck in c[..terms - 1].iter().rev() {
-        acc = mul_add_lanes(acc, t, ck);
+    let top = terms - 1;
+    if top == 0 {
+        return F64s::splat(c[0]);
     }
-    acc
+    let t2 = t * t;
+    let (mut e, mut o) = if top.is_multiple_of(2) {
+        (top, top - 1)
+    } else {
+        (top - 1, top)
+    };
+    let (mut even, mut odd) = (F64s::splat(c[e]), F64s::splat(c[o]));
+    while e >= 2 {
+        e -= 2;
+        even = mul_add_lanes(even, t2, F64s::splat(c[e]));
+    }
+    while o >= 2 {
+        o -= 2;
+        odd = mul_add_lanes(odd, t2, F64s::splat(c[o]));
+    }
+    mul_add_lanes(odd, t, even)
 }
 
 impl Kernel for Polynomial {
