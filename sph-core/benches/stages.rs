@@ -6,7 +6,9 @@
 #![allow(missing_docs)]
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use sph_core::av_switch::{update_alpha, velocity_divergence, AvSwitchParams, FlowState};
+use sph_core::av_switch::{
+    iad_and_velocity_divergence, update_alpha, velocity_divergence, AvSwitchParams, FlowState,
+};
 use sph_core::density::{density, Positions};
 use sph_core::iad::iad;
 use sph_core::momentum::{
@@ -175,6 +177,27 @@ fn benches(c: &mut Criterion) {
             let params = AvSwitchParams::default();
             let mut div_v = vec![0.0; rho.len()];
             let mut alpha = vec![params.alpha_min; rho.len()];
+            // IAD and div v in one pass, as the solver runs them with switches.
+            let mut c6: [Vec<f64>; 6] = std::array::from_fn(|_| vec![0.0; rho.len()]);
+            let mut plain = flow;
+            plain.iad = [&[]; 6];
+            g.bench_function("iad_divergence_fused", |b| {
+                b.iter(|| {
+                    black_box(
+                        iad_and_velocity_divergence(
+                            &kernel,
+                            &bbox,
+                            plain,
+                            [m, rho],
+                            &list,
+                            &mut c6,
+                            &mut div_v,
+                            &mut [],
+                        )
+                        .is_ok(),
+                    )
+                })
+            });
             g.bench_function("av_switches_iad", |b| {
                 b.iter(|| {
                     velocity_divergence(&kernel, &bbox, flow, grad, &list, &mut div_v, &mut []);

@@ -103,6 +103,7 @@
 //! ```
 
 use crate::density::Positions;
+use crate::iad::{store_matrices, FirstSingular, Singular, Tau, TauSums};
 use crate::momentum::{Flow, Gradients, HydroState};
 use crate::pair_loop::{
     neighbour_lanes, sym_mat_vec, with_gradients, F64s, Group, PairStage, WithGradients, LANES,
@@ -349,10 +350,30 @@ impl<K: Kernel, const IAD: bool> PairStage for VelocityGradient<'_, K, IAD> {
     }
 
     #[inline(always)]
-    fn pair(&self, (vi, inv_h, m): &mut GradientSums, j: usize, d: [F64s; 3], r2: F64s) {
+    fn pair(&self, sums: &mut GradientSums, j: usize, d: [F64s; 3], r2: F64s) {
         let f = &self.0;
         let r = r2.sqrt();
-        let w = f.m[j] / f.rho[j] * pair_weight::<K, IAD>(f.kernel, r, *inv_h);
+        self.add(sums, j, d, pair_weight::<K, IAD>(f.kernel, r, sums.1));
+    }
+
+    #[inline(always)]
+    fn finish(&self, g: &Group, sums: GradientSums, out: Self::Out<'_>) {
+        let c = if IAD {
+            self.0.iad.map(|c| g.load(c))
+        } else {
+            [F64s::splat(0.0); 6]
+        };
+        self.store(c, sums, out);
+    }
+}
+
+impl<K: Kernel, const IAD: bool> VelocityGradient<'_, K, IAD> {
+    /// Adds partner `j` at separation `d` with kernel weight `weight`
+    /// ([`pair_weight`]).
+    #[inline(always)]
+    fn add(&self, (vi, _, m): &mut GradientSums, j: usize, d: [F64s; 3], weight: F64s) {
+        let f = &self.0;
+        let w = f.m[j] / f.rho[j] * weight;
         let dv = [f.v[0][j] - vi[0], f.v[1][j] - vi[1], f.v[2][j] - vi[2]];
         for (mc, dc) in m.iter_mut().zip(d) {
             let wd = w * dc;
@@ -362,14 +383,20 @@ impl<K: Kernel, const IAD: bool> PairStage for VelocityGradient<'_, K, IAD> {
         }
     }
 
+    /// `div v` (and `|curl v|`) of the group from its sums, with the
+    /// targets' inverse IAD matrices `c` (read with IAD only).
     #[inline(always)]
-    fn finish(&self, g: &Group, (_, inv_h, m): GradientSums, ([dv], cv): Self::Out<'_>) {
+    fn store(
+        &self,
+        c: [F64s; 6],
+        (_, inv_h, m): GradientSums,
+        ([dv], cv): <Self as PairStage>::Out<'_>,
+    ) {
         let f = &self.0;
         let k3 = f.norm * inv_h * inv_h * inv_h;
         let zero = F64s::splat(0.0);
         let gr = if IAD {
             // A_ij = -C d W: G = -K/h^3 C m
-            let c = f.iad.map(|c| g.load(c));
             let mut out = [[zero; 3]; 3];
             for b in 0..3 {
                 let col = sym_mat_vec(&c, [m[0][b], m[1][b], m[2][b]]);
@@ -449,6 +476,96 @@ pub fn velocity_divergence<K: Kernel>(
         curl_v,
     };
     with_gradients(gradients, run);
+}
+
+/// The IAD matrices ([`iad_volumes`](crate::iad::iad_volumes), volumes
+/// `V_j = num_j / den_j`) and, in the same traversal of the lists, the
+/// velocity divergence (and curl) of [`velocity_divergence`] with
+/// [`Gradients::Iad`]: both sum the same kernel values, so one pass
+/// evaluates the kernel once per pair instead of twice. The results are
+/// those of the two separate calls bit for bit. `flow.iad` is not read
+/// (the matrices come from this pass).
+///
+/// # Errors
+/// The lowest-index singular matrix, as [`iad`](crate::iad::iad).
+///
+/// # Panics
+/// If the arrays differ in length or do not cover the lists.
+#[allow(clippy::too_many_arguments)]
+pub fn iad_and_velocity_divergence<K: Kernel>(
+    kernel: &K,
+    bbox: &BoundingBox,
+    flow: FlowState<'_>,
+    [num, den]: [&[f64]; 2],
+    nl: &CompactNeighborList,
+    c: &mut [Vec<f64>; 6],
+    div_v: &mut [f64],
+    curl_v: &mut [f64],
+) -> Result<(), Singular> {
+    let driver = Flow::driver(bbox, kernel, &flow, nl);
+    let n = flow.pos.x.len();
+    let stage = IadGradient {
+        tau: Tau {
+            kernel,
+            norm: kernel.norm(),
+            h: flow.pos.h,
+            m: &num[..n],
+            rho: &den[..n],
+        },
+        grad: VelocityGradient(Flow::new(kernel, &flow, false)),
+    };
+    let r = nl.targets();
+    let [c0, c1, c2, c3, c4, c5] = c;
+    let matrices = [c0, c1, c2, c3, c4, c5].map(|c| &mut c[r.clone()]);
+    let curl = (!curl_v.is_empty()).then(|| [&mut curl_v[r.clone()]]);
+    match driver.run(&stage, (matrices, ([&mut div_v[r]], curl))) {
+        FirstSingular(Some(s)) => Err(s),
+        FirstSingular(None) => Ok(()),
+    }
+}
+
+/// [`Tau`] and the IAD velocity gradient on one kernel evaluation.
+struct IadGradient<'a, K> {
+    tau: Tau<'a, K>,
+    grad: VelocityGradient<'a, K, true>,
+}
+
+impl<K: Kernel> PairStage for IadGradient<'_, K> {
+    type Sums = (TauSums, GradientSums);
+    type Out<'o> = (
+        [&'o mut [f64]; 6],
+        <VelocityGradient<'o, K, true> as PairStage>::Out<'o>,
+    );
+    type Stats = FirstSingular;
+
+    #[inline(always)]
+    fn start(&self, g: &Group) -> Self::Sums {
+        (self.tau.start(g), self.grad.start(g))
+    }
+
+    #[inline(always)]
+    fn pair(&self, (tau, grad): &mut Self::Sums, j: usize, d: [F64s; 3], r2: F64s) {
+        let shape = self.tau.kernel.shape_lanes(r2.sqrt() * tau.0);
+        self.tau.add(&mut tau.1, j, d, shape);
+        self.grad.add(grad, j, d, shape);
+    }
+
+    #[inline(always)]
+    fn finish(
+        &self,
+        g: &Group,
+        (tau, grad): Self::Sums,
+        (c_out, grad_out): Self::Out<'_>,
+    ) -> FirstSingular {
+        let (c, first_bad) = self.tau.invert(g, tau);
+        store_matrices(g, &c, c_out);
+        // The lanes' matrices as the separate pass reads them back (padding
+        // lanes repeat the last target).
+        let lane = |k: usize| F64s::from_array(std::array::from_fn(|l| c[l.min(g.valid - 1)][k]));
+        self.grad
+            .store([0, 1, 2, 3, 4, 5].map(lane), grad, grad_out);
+        first_bad
+    }
 }
 
 /// The shock indicator's sums: `grad(div v)` and the signal velocity.

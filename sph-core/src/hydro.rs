@@ -1,7 +1,9 @@
 //! One SPH-EXA time step on one node: sort, tree, neighbours, density,
 //! EOS, IAD, momentum and energy, time step, integration.
 
-use crate::av_switch::{balsara, update_alpha, velocity_divergence, FlowState};
+use crate::av_switch::{
+    balsara, iad_and_velocity_divergence, update_alpha, velocity_divergence, FlowState,
+};
 use crate::conduction::conduction;
 use crate::conserved::Conserved;
 use crate::density::{density, ve_density, xmass, Positions, VeOut};
@@ -546,8 +548,12 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         clock.lap(Stage::Eos);
         self.exchange_thermo(p)?;
         clock.lap(Stage::Halos);
+        // With IAD gradients the velocity divergence the switches need is
+        // summed in the IAD pass (one kernel evaluation per pair).
+        let divergence_done =
+            self.config.scheme.gradients == Gradients::Iad && self.config.scheme.needs_divergence();
         if self.config.scheme.gradients == Gradients::Iad {
-            self.iad(p, bbox, step)?;
+            self.iad(p, bbox, step, divergence_done)?;
             clock.lap(Stage::Iad);
             let [c0, c1, c2, c3, c4, c5] = &mut p.iad;
             self.domain
@@ -558,7 +564,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         self.factors
             .fill_with(&hydro_state!(p), ve.then_some(self.kx.as_slice()));
         if self.config.scheme.needs_divergence() {
-            self.switches(p, bbox, step, &mut clock)?;
+            self.switches(p, bbox, step, &mut clock, divergence_done)?;
         }
         let forces = self.momentum(p, bbox);
         clock.lap(Stage::Momentum);
@@ -689,19 +695,54 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
 
     /// The IAD matrices of the owned particles, with volumes `m / rho` or
     /// the volume elements `X / k`.
-    fn iad(&self, p: &mut Particles, bbox: &BoundingBox, step: u64) -> Result<(), CoreError> {
+    ///
+    /// With `divergence` the velocity divergence (and the curl, for the
+    /// Balsara limiter) of the owned particles is computed in the same pass.
+    fn iad(
+        &mut self,
+        p: &mut Particles,
+        bbox: &BoundingBox,
+        step: u64,
+        divergence: bool,
+    ) -> Result<(), CoreError> {
         let pos = positions!(p);
         let volumes = match self.config.scheme.volume {
             Volume::Mass => [&p.m[..], &p.rho[..]],
             Volume::Generalised => [&self.xm[..], &self.kx[..]],
         };
-        iad_volumes(&self.kernel, bbox, pos, volumes, &self.list, &mut p.iad).map_err(|s| {
-            CoreError::SingularIad {
-                step,
-                id: p.id[s.index],
-                det: s.det,
-                neighbors: self.list.count(s.index),
+        let result = if divergence {
+            let n = p.len();
+            self.div_v.resize(n, 0.0);
+            if self.config.scheme.balsara {
+                self.curl_v.resize(n, 0.0);
             }
+            let flow = FlowState {
+                pos,
+                vx: &p.vx,
+                vy: &p.vy,
+                vz: &p.vz,
+                rho: &p.rho,
+                c: &p.c,
+                iad: [&[]; 6],
+            };
+            iad_and_velocity_divergence(
+                &self.kernel,
+                bbox,
+                flow,
+                volumes,
+                &self.list,
+                &mut p.iad,
+                &mut self.div_v,
+                &mut self.curl_v,
+            )
+        } else {
+            iad_volumes(&self.kernel, bbox, pos, volumes, &self.list, &mut p.iad)
+        };
+        result.map_err(|s| CoreError::SingularIad {
+            step,
+            id: p.id[s.index],
+            det: s.det,
+            neighbors: self.list.count(s.index),
         })
     }
 
@@ -716,26 +757,29 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         bbox: &BoundingBox,
         step: u64,
         clock: &mut StageClock,
+        divergence_done: bool,
     ) -> Result<(), CoreError> {
         let scheme = self.config.scheme;
         let n = p.len();
-        self.div_v.resize(n, 0.0);
-        if scheme.balsara {
-            self.curl_v.resize(n, 0.0);
-        }
-        let flow = FlowState::from(hydro_state!(p));
         let g = scheme.gradients;
         let (kernel, list) = (&self.kernel, &self.list);
-        velocity_divergence(
-            kernel,
-            bbox,
-            flow,
-            g,
-            list,
-            &mut self.div_v,
-            &mut self.curl_v,
-        );
-        clock.lap(Stage::Switches);
+        if !divergence_done {
+            self.div_v.resize(n, 0.0);
+            if scheme.balsara {
+                self.curl_v.resize(n, 0.0);
+            }
+            let flow = FlowState::from(hydro_state!(p));
+            velocity_divergence(
+                kernel,
+                bbox,
+                flow,
+                g,
+                list,
+                &mut self.div_v,
+                &mut self.curl_v,
+            );
+            clock.lap(Stage::Switches);
+        }
         if let Some(sw) = scheme.switches() {
             self.domain.exchange(&mut [self.div_v.as_mut_slice()])?;
             clock.lap(Stage::Halos);

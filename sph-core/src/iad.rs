@@ -4,7 +4,7 @@
 //! fields.
 
 use crate::density::Positions;
-use crate::pair_loop::{F64s, Group, PairLoop, PairStage, Reduce};
+use crate::pair_loop::{F64s, Group, PairLoop, PairStage, Reduce, LANES};
 use sph_kernels::Kernel;
 use sph_tree::{BoundingBox, CompactNeighborList};
 
@@ -98,8 +98,18 @@ pub fn iad_volumes<K: Kernel>(
     }
 }
 
+/// Writes the group's matrices into the six component slices.
+#[inline(always)]
+pub(crate) fn store_matrices(g: &Group, c: &[[f64; 6]; LANES], mut out: [&mut [f64]; 6]) {
+    for (l, cl) in c.iter().enumerate().take(g.valid) {
+        for (o, &v) in out.iter_mut().zip(cl) {
+            o[l] = v;
+        }
+    }
+}
+
 /// The lowest-index singular matrix of some targets.
-struct FirstSingular(Option<Singular>);
+pub(crate) struct FirstSingular(pub(crate) Option<Singular>);
 
 impl Reduce for FirstSingular {
     fn identity() -> Self {
@@ -116,14 +126,56 @@ impl Reduce for FirstSingular {
 
 /// The sums of `tau`: partners beyond 2 h_i add W = 0, so each lane is the
 /// scalar sum over its list.
-struct Tau<'a, K> {
-    kernel: &'a K,
-    norm: f64,
-    h: &'a [f64],
+pub(crate) struct Tau<'a, K> {
+    pub(crate) kernel: &'a K,
+    pub(crate) norm: f64,
+    pub(crate) h: &'a [f64],
     /// Volume numerators (`m` or `X`).
-    m: &'a [f64],
+    pub(crate) m: &'a [f64],
     /// Volume denominators (`rho` or `k`).
-    rho: &'a [f64],
+    pub(crate) rho: &'a [f64],
+}
+
+/// A group's `1/h` and six sums of `tau`.
+pub(crate) type TauSums = (F64s, [F64s; 6]);
+
+impl<K: Kernel> Tau<'_, K> {
+    /// Adds partner `j` at separation `d` with kernel shape `shape`.
+    #[inline(always)]
+    pub(crate) fn add(&self, t: &mut [F64s; 6], j: usize, d: [F64s; 3], shape: F64s) {
+        let w = self.m[j] / self.rho[j] * shape;
+        t[0] += w * d[0] * d[0];
+        t[1] += w * d[0] * d[1];
+        t[2] += w * d[0] * d[2];
+        t[3] += w * d[1] * d[1];
+        t[4] += w * d[1] * d[2];
+        t[5] += w * d[2] * d[2];
+    }
+
+    /// The group's inverse matrices per lane (zeros where singular) and
+    /// the first singular one.
+    #[inline(always)]
+    pub(crate) fn invert(
+        &self,
+        g: &Group,
+        (inv_h, t): TauSums,
+    ) -> ([[f64; 6]; LANES], FirstSingular) {
+        let k3 = self.norm * inv_h * inv_h * inv_h;
+        let t = t.map(|v| (v * k3).to_array());
+        let mut first_bad = None;
+        let mut c = [[0.0; 6]; LANES];
+        for (l, cl) in c.iter_mut().enumerate().take(g.valid) {
+            let tl = [t[0][l], t[1][l], t[2][l], t[3][l], t[4][l], t[5][l]];
+            *cl = invert_symmetric(tl).unwrap_or_else(|det| {
+                first_bad = first_bad.or(Some(Singular {
+                    index: g.first + l,
+                    det,
+                }));
+                [0.0; 6]
+            });
+        }
+        (c, FirstSingular(first_bad))
+    }
 }
 
 impl<K: Kernel> PairStage for Tau<'_, K> {
@@ -140,33 +192,13 @@ impl<K: Kernel> PairStage for Tau<'_, K> {
     #[inline(always)]
     fn pair(&self, (inv_h, t): &mut Self::Sums, j: usize, d: [F64s; 3], r2: F64s) {
         let v = r2.sqrt() * *inv_h;
-        let w = self.m[j] / self.rho[j] * self.kernel.shape_lanes(v);
-        t[0] += w * d[0] * d[0];
-        t[1] += w * d[0] * d[1];
-        t[2] += w * d[0] * d[2];
-        t[3] += w * d[1] * d[1];
-        t[4] += w * d[1] * d[2];
-        t[5] += w * d[2] * d[2];
+        self.add(t, j, d, self.kernel.shape_lanes(v));
     }
 
     #[inline(always)]
-    fn finish(&self, g: &Group, (inv_h, t): Self::Sums, mut out: Self::Out<'_>) -> FirstSingular {
-        let k3 = self.norm * inv_h * inv_h * inv_h;
-        let t = t.map(|v| (v * k3).to_array());
-        let mut first_bad = None;
-        for l in 0..g.valid {
-            let tl = [t[0][l], t[1][l], t[2][l], t[3][l], t[4][l], t[5][l]];
-            let inv = invert_symmetric(tl).unwrap_or_else(|det| {
-                first_bad = first_bad.or(Some(Singular {
-                    index: g.first + l,
-                    det,
-                }));
-                [0.0; 6]
-            });
-            for (o, v) in out.iter_mut().zip(inv) {
-                o[l] = v;
-            }
-        }
-        FirstSingular(first_bad)
+    fn finish(&self, g: &Group, sums: Self::Sums, out: Self::Out<'_>) -> FirstSingular {
+        let (c, first_bad) = self.invert(g, sums);
+        store_matrices(g, &c, out);
+        first_bad
     }
 }
