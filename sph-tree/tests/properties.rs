@@ -1,7 +1,9 @@
 //! Property tests of the tree crate's invariants.
 
 use proptest::prelude::*;
-use sph_tree::sfc::{hilbert_decode, hilbert_encode, morton_decode, morton_encode};
+use sph_tree::sfc::{
+    hilbert_decode, hilbert_encode, hilbert_encode_lanes, morton_decode, morton_encode,
+};
 use sph_tree::{
     apply_permutation, compute_keys, Boundary, BoundingBox, Curve, KeySorter, NeighborList,
     NeighborSearch, Octree, CELLS_PER_AXIS, GROUP_LANES, MAX_LEVEL,
@@ -149,6 +151,41 @@ proptest! {
         let k = hilbert_encode(a, b, c);
         prop_assert!(k < 1 << 63);
         prop_assert_eq!(hilbert_decode(k), (a, b, c));
+    }
+
+    /// Eight keys at once are the scalar keys bit for bit (any input bits,
+    /// as the scalar form masks them too).
+    #[test]
+    fn hilbert_lanes_equal_scalar(
+        a in proptest::array::uniform8(any::<u32>()),
+        b in proptest::array::uniform8(0..CELLS_PER_AXIS),
+        c in proptest::array::uniform8(0..CELLS_PER_AXIS),
+    ) {
+        let lanes = hilbert_encode_lanes(a, b, c);
+        for l in 0..8 {
+            prop_assert_eq!(lanes[l], hilbert_encode(a[l], b[l], c[l]));
+        }
+    }
+
+    /// compute_keys (8 at a time, blocks, remainders) gives the per-particle
+    /// keys for both curves.
+    #[test]
+    fn computed_keys_equal_per_particle_keys(seed in any::<u64>(), n in 0usize..3000, morton: bool) {
+        let mut rng = Rng(seed);
+        let p: Vec<[f64; 3]> = (0..n).map(|_| [rng.uniform(), rng.uniform(), rng.uniform()]).collect();
+        let (x, y, z): (Vec<f64>, Vec<f64>, Vec<f64>) = (
+            p.iter().map(|q| q[0]).collect(),
+            p.iter().map(|q| q[1]).collect(),
+            p.iter().map(|q| q[2]).collect(),
+        );
+        let bbox = BoundingBox::cube(0.0, 1.0, Boundary::Periodic).unwrap();
+        let curve = if morton { Curve::Morton } else { Curve::Hilbert };
+        let mut keys = Vec::new();
+        compute_keys(&bbox, curve, &x, &y, &z, &mut keys);
+        for (i, k) in keys.iter().enumerate() {
+            let (a, b, c) = sph_tree::sfc::cell_of(&bbox, p[i]);
+            prop_assert_eq!(*k, curve.encode(a, b, c));
+        }
     }
 
     #[test]
