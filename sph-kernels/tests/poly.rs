@@ -2,10 +2,10 @@
 //! the fit's tolerance everywhere on the support, lanes equal to scalars,
 //! and the fallback to the table where no polynomial fits.
 
+mod common;
+
 use proptest::prelude::*;
-use sph_kernels::{
-    F64s, FastKernel, FitVariable, Kernel, KernelChoice, KernelError, Polynomial, Sinc, LANES,
-};
+use sph_kernels::{FastKernel, FitVariable, Kernel, KernelChoice, KernelError, Polynomial, Sinc};
 
 /// Every built-in choice, sinc with integer and non-integer exponents.
 fn any_choice() -> impl Strategy<Value = KernelChoice> {
@@ -88,16 +88,6 @@ proptest! {
             1 => prop::num::f64::ANY,
         ]),
     ) {
-        let k = choice.fast().unwrap();
-        let lanes = F64s::from_array(v);
-        let w = k.shape_lanes(lanes).to_array();
-        let (w2, dw) = k.shape_and_derivative_lanes(lanes);
-        let (w2, dw) = (w2.to_array(), dw.to_array());
-        for l in 0..LANES {
-            let (sw, sdw) = k.shape_and_derivative(v[l]);
-            prop_assert_eq!(w[l].to_bits(), k.shape(v[l]).to_bits(), "v = {}", v[l]);
-            prop_assert_eq!(w2[l].to_bits(), sw.to_bits(), "v = {}", v[l]);
-            prop_assert_eq!(dw[l].to_bits(), sdw.to_bits(), "v = {}", v[l]);
-        }
+        common::lanes_match_scalar(&choice.fast().unwrap(), v)?;
     }
 }

@@ -30,7 +30,7 @@
 mod common;
 
 use proptest::prelude::*;
-use sph_kernels::{F64s, Kernel, KernelChoice, Tabulated, LANES};
+use sph_kernels::{Kernel, KernelChoice, Tabulated};
 
 /// Error statistics of a table against its source kernel.
 #[derive(Debug, Default)]
@@ -145,16 +145,7 @@ proptest! {
         let table = KernelChoice::Sinc(n).tabulate(Tabulated::DEFAULT_POINTS).unwrap();
         let kernels: [&dyn Kernel; 2] = [&table, exact.as_ref()];
         for k in kernels {
-            let lanes = F64s::from_array(v);
-            let w = k.shape_lanes(lanes).to_array();
-            let (w2, dw) = k.shape_and_derivative_lanes(lanes);
-            let (w2, dw) = (w2.to_array(), dw.to_array());
-            for l in 0..LANES {
-                let (sw, sdw) = k.shape_and_derivative(v[l]);
-                prop_assert_eq!(w[l].to_bits(), k.shape(v[l]).to_bits(), "v = {}", v[l]);
-                prop_assert_eq!(w2[l].to_bits(), sw.to_bits(), "v = {}", v[l]);
-                prop_assert_eq!(dw[l].to_bits(), sdw.to_bits(), "v = {}", v[l]);
-            }
+            common::lanes_match_scalar(k, v)?;
         }
     }
 }

@@ -1,7 +1,8 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
-use sph_kernels::{CubicSpline, Kernel, Sinc, WendlandC2, WendlandC4, WendlandC6};
+use proptest::prelude::*;
+use sph_kernels::{CubicSpline, F64s, Kernel, Sinc, WendlandC2, WendlandC4, WendlandC6, LANES};
 
 /// Every built-in analytic kernel, with a name for failure messages.
 pub fn analytic_kernels() -> Vec<(String, Box<dyn Kernel>)> {
@@ -39,4 +40,19 @@ pub fn mass(kernel: &dyn Kernel) -> f64 {
     let f = |v: f64| kernel.shape(v.min(2.0 * (1.0 - f64::EPSILON))) * v * v;
     let n = 100_000;
     4.0 * std::f64::consts::PI * kernel.norm() * (simpson(f, 0.0, 1.0, n) + simpson(f, 1.0, 2.0, n))
+}
+
+/// The lane forms of `k` at `v` equal its scalar forms bit for bit.
+pub fn lanes_match_scalar(k: &dyn Kernel, v: [f64; LANES]) -> Result<(), TestCaseError> {
+    let lanes = F64s::from_array(v);
+    let w = k.shape_lanes(lanes).to_array();
+    let (w2, dw) = k.shape_and_derivative_lanes(lanes);
+    let (w2, dw) = (w2.to_array(), dw.to_array());
+    for l in 0..LANES {
+        let (sw, sdw) = k.shape_and_derivative(v[l]);
+        prop_assert_eq!(w[l].to_bits(), k.shape(v[l]).to_bits(), "v = {}", v[l]);
+        prop_assert_eq!(w2[l].to_bits(), sw.to_bits(), "v = {}", v[l]);
+        prop_assert_eq!(dw[l].to_bits(), sdw.to_bits(), "v = {}", v[l]);
+    }
+    Ok(())
 }
