@@ -11,8 +11,8 @@ use crate::eos::Eos;
 use crate::iad::iad_volumes;
 use crate::integrate::{integrate, HUpdate};
 use crate::momentum::{
-    momentum_energy_with, Alpha, Gradients, HydroState, MomentumScheme, MomentumStats, PairFactors,
-    Rates,
+    momentum_energy_with, Alpha, ArtificialStress, Gradients, HydroState, MomentumScheme,
+    MomentumStats, PairFactors, Rates,
 };
 use crate::neighbors::{find_neighbors, NeighborParams};
 use crate::scheme::{Scheme, Viscosity, Volume};
@@ -650,7 +650,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             bbox,
             dt,
             self.dt_prev,
-            Some(h_update),
+            (!self.config.scheme.fixed_h).then_some(h_update),
             guard,
             step,
         )?;
@@ -840,6 +840,9 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             alpha,
             av_form: s.av_form,
             xm: (s.volume == Volume::Generalised).then_some(self.xm.as_slice()),
+            stress: s
+                .artificial_stress
+                .map(|e| ArtificialStress::new(e, self.config.neighbors.ng0, &self.kernel)),
         };
         let (k, f, list) = (&self.kernel, &self.factors, &self.list);
         momentum_energy_with(k, bbox, state, f, scheme, list, rates)

@@ -151,6 +151,7 @@ pub fn momentum_energy<K: Kernel>(
         alpha: Alpha::Constant(alpha),
         av_form: AvForm::Paper,
         xm: None,
+        stress: None,
     };
     momentum_energy_with(kernel, bbox, s, f, scheme, nl, out)
 }
@@ -178,6 +179,7 @@ pub fn momentum_energy_switched<K: Kernel>(
         alpha: Alpha::PerParticle(alpha),
         av_form: AvForm::Paper,
         xm: None,
+        stress: None,
     };
     momentum_energy_with(kernel, bbox, s, f, scheme, nl, out)
 }
@@ -204,6 +206,51 @@ pub struct MomentumScheme<'a> {
     /// The generalised volume elements `X` of every particle (with
     /// [`PairFactors::fill_with`] given their `k`), or none (`m / rho`).
     pub xm: Option<&'a [f64]>,
+    /// Artificial stress against the tensile instability, or none.
+    pub stress: Option<ArtificialStress>,
+}
+
+/// Monaghan's (2000) artificial stress for particles under tension: pair
+/// `i, j` gains the repulsive term `R_ij f_ij^4` beside its pressure terms,
+/// with `R_ij = R_i + R_j`, `R_i = epsilon max(-P_i, 0) / (Omega_i rho_i^2)`
+/// and `f_ij = (w(r/h_i) + w(r/h_j)) / (2 w(q_s))`, `w` the kernel's shape
+/// and `q_s` the particle spacing over h. It enters like a viscosity
+/// term (force along the mean gradient, heating `1/2 R_ij f^4 v_ij . A`),
+/// so momentum and energy stay conserved; it is zero where no pressure is
+/// negative and falls off as `f^4` beyond the spacing, so it acts only on
+/// pairs that close in under tension.
+///
+/// ```
+/// use sph_core::momentum::ArtificialStress;
+/// use sph_kernels::{Kernel, Sinc};
+/// let k = Sinc::new(6.0).unwrap();
+/// let s = ArtificialStress::new(0.2, 100, &k);
+/// // The spacing of a lattice with 100 neighbours within 2 h is 0.694 h.
+/// assert!((s.spacing_over_h - 0.6944).abs() < 1e-3);
+/// assert!((s.inv_w_spacing * k.shape(s.spacing_over_h) - 1.0).abs() < 1e-12);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArtificialStress {
+    /// Strength `epsilon` (Monaghan 2000: 0.2 for `n = 4`).
+    pub epsilon: f64,
+    /// Spacing over smoothing length `q_s`: `2 (4 pi / (3 ng0))^(1/3)`
+    /// for `ng0` neighbours within `2 h` of a lattice.
+    pub spacing_over_h: f64,
+    /// `1 / w(q_s)`.
+    pub inv_w_spacing: f64,
+}
+
+impl ArtificialStress {
+    /// The stress of strength `epsilon` for a target of `ng0` neighbours
+    /// (self included) with `kernel`.
+    pub fn new<K: Kernel>(epsilon: f64, ng0: usize, kernel: &K) -> Self {
+        let spacing_over_h = 2.0 * (4.0 * std::f64::consts::PI / (3.0 * ng0 as f64)).cbrt();
+        Self {
+            epsilon,
+            spacing_over_h,
+            inv_w_spacing: 1.0 / kernel.shape(spacing_over_h),
+        }
+    }
 }
 
 /// Accelerations and du/dt of every target of `nl` for any scheme
@@ -252,6 +299,7 @@ pub fn momentum_energy_with<K: Kernel>(
         alpha: scheme.alpha,
         av_form: scheme.av_form,
         xm: scheme.xm,
+        stress: scheme.stress,
         nl,
         out,
     };
@@ -272,6 +320,7 @@ struct MomentumRun<'a, K> {
     alpha: Alpha<'a>,
     av_form: AvForm,
     xm: Option<&'a [f64]>,
+    stress: Option<ArtificialStress>,
     nl: &'a CompactNeighborList,
     out: Rates<'a>,
 }
@@ -295,23 +344,24 @@ impl<K: Kernel> WithGradients for MomentumRun<'_, K> {
         let flow = Flow::new(self.kernel, &flow_state, IAD);
         let xm = self.xm.map_or(&[][..], |x| &x[..n]);
         let sphexa = self.av_form == AvForm::SphExa;
+        let stress = self.stress;
         macro_rules! go {
             ($sw:literal, $a:expr, $per:expr) => {
                 match (self.xm.is_some(), sphexa) {
                     (false, false) => driver.run(
-                        &momentum::<K, IAD, $sw, false, false>(flow, f, n, $a, $per, xm),
+                        &momentum::<K, IAD, $sw, false, false>(flow, f, n, $a, $per, xm, stress),
                         out,
                     ),
                     (false, true) => driver.run(
-                        &momentum::<K, IAD, $sw, false, true>(flow, f, n, $a, $per, xm),
+                        &momentum::<K, IAD, $sw, false, true>(flow, f, n, $a, $per, xm, stress),
                         out,
                     ),
                     (true, false) => driver.run(
-                        &momentum::<K, IAD, $sw, true, false>(flow, f, n, $a, $per, xm),
+                        &momentum::<K, IAD, $sw, true, false>(flow, f, n, $a, $per, xm, stress),
                         out,
                     ),
                     (true, true) => driver.run(
-                        &momentum::<K, IAD, $sw, true, true>(flow, f, n, $a, $per, xm),
+                        &momentum::<K, IAD, $sw, true, true>(flow, f, n, $a, $per, xm, stress),
                         out,
                     ),
                 }
@@ -332,6 +382,7 @@ fn momentum<'a, K, const IAD: bool, const SWITCHED: bool, const VE: bool, const 
     alpha: f64,
     alpha_per: &'a [f64],
     xm: &'a [f64],
+    stress: Option<ArtificialStress>,
 ) -> Momentum<'a, K, IAD, SWITCHED, VE, SPHEXA> {
     Momentum {
         flow,
@@ -341,6 +392,7 @@ fn momentum<'a, K, const IAD: bool, const SWITCHED: bool, const VE: bool, const 
         alpha,
         alpha_per,
         xm,
+        stress,
     }
 }
 
@@ -357,6 +409,7 @@ struct Momentum<'a, K, const IAD: bool, const SWITCHED: bool, const VE: bool, co
     alpha: f64,
     alpha_per: &'a [f64],
     xm: &'a [f64],
+    stress: Option<ArtificialStress>,
 }
 
 /// What the pair stages read of every particle, cut to one length (so
@@ -418,6 +471,8 @@ struct MomentumSums {
     pre_i: F64s,
     inv_rho_i: F64s,
     alpha_i: F64s,
+    /// The targets' `R_i` of the artificial stress.
+    stress_i: F64s,
     /// Density and volume element of the targets (volume elements only).
     rho_i: F64s,
     xm_i: F64s,
@@ -459,6 +514,10 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool, const VE: bool, const SPH
             } else {
                 F64s::splat(self.alpha)
             },
+            stress_i: self.stress.map_or(zero, |s| {
+                let pre = g.load(self.pre);
+                F64s::splat(s.epsilon) * (zero - pre).max(zero)
+            }),
             rho_i: if VE { g.load(self.flow.rho) } else { zero },
             xm_i: if VE { g.load(self.xm) } else { zero },
             ci_m: if IAD {
@@ -491,23 +550,26 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool, const VE: bool, const SPH
         let inv_hj = self.inv_h[j];
         let inv_hi = t.inv_hi;
         // A_ij(h_i), A_ij(h_j).
-        let (ai, aj) = if IAD {
+        // A_ij(h_i), A_ij(h_j) and the kernel shapes w(r/h_i), w(r/h_j).
+        let (ai, aj, shape_i, shape_j) = if IAD {
             // A = C (x_j - x_i) W = -(C d) W
-            let wi = t.ki3 * self.flow.kernel.shape_lanes(rr * inv_hi);
+            let si = self.flow.kernel.shape_lanes(rr * inv_hi);
+            let sj = self.flow.kernel.shape_lanes(rr * inv_hj);
+            let wi = t.ki3 * si;
             let kj3 = norm * inv_hj * inv_hj * inv_hj;
-            let wj = kj3 * self.flow.kernel.shape_lanes(rr * inv_hj);
+            let wj = kj3 * sj;
             let cj = [0, 1, 2, 3, 4, 5].map(|k| F64s::splat(self.flow.iad[k][j]));
             let cd = sym_mat_vec(&t.ci_m, d);
             let cdj = sym_mat_vec(&cj, d);
-            (scale3(cd, -wi), scale3(cdj, -wj))
+            (scale3(cd, -wi), scale3(cdj, -wj), si, sj)
         } else {
             // grad_i W(r, h) = K/h^4 w'(r/h) d / r
-            let (_, dwi) = self.flow.kernel.shape_and_derivative_lanes(rr * inv_hi);
-            let (_, dwj) = self.flow.kernel.shape_and_derivative_lanes(rr * inv_hj);
+            let (si, dwi) = self.flow.kernel.shape_and_derivative_lanes(rr * inv_hi);
+            let (sj, dwj) = self.flow.kernel.shape_and_derivative_lanes(rr * inv_hj);
             let gi = t.ki3 * inv_hi * dwi * inv_r;
             let kj4 = norm * inv_hj * inv_hj * inv_hj * inv_hj;
             let gj = kj4 * dwj * inv_r;
-            (scale3(d, gi), scale3(d, gj))
+            (scale3(d, gi), scale3(d, gj), si, sj)
         };
         let vi = t.vi;
         let vij = [
@@ -531,9 +593,18 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool, const VE: bool, const SPH
             t.acc_vsig = t.acc_vsig.max(vsig * weight);
             w.where_negative(-0.5 * alpha_ij * vsig * w)
         };
-        let vi_r = 0.5 * visc * t.inv_rho_i;
+        let mut vi_r = 0.5 * visc * t.inv_rho_i;
         let inv_rho_j = self.inv_rho[j];
-        let vj_r = 0.5 * visc * inv_rho_j;
+        let mut vj_r = 0.5 * visc * inv_rho_j;
+        if let Some(s) = self.stress {
+            // R_ij f^4 / 2 on each side: -m_j R_ij f^4 (A_i + A_j) / 2.
+            let rj = s.epsilon * (-self.pre[j]).max(0.0);
+            let f = 0.5 * s.inv_w_spacing * (shape_i + shape_j);
+            let f2 = f * f;
+            let half = 0.5 * (t.stress_i + rj) * f2 * f2;
+            vi_r += half;
+            vj_r += half;
+        }
         let (ci_f, cj_f, a_mom) = if VE {
             let (a, b) = atwood_weights(t.rho_i, self.flow.rho[j], t.xm_i, self.xm[j]);
             (t.pre_i * a + vi_r, self.pre[j] * b + vj_r, a)

@@ -106,6 +106,18 @@ pub struct Scheme {
     /// Artificial conductivity of internal energy `alpha_u` (Price 2008),
     /// or none (the paper's scheme).
     pub conductivity: Option<f64>,
+    /// Monaghan's (2000) artificial stress against the tensile instability
+    /// of particles under negative pressure, its strength `epsilon`
+    /// ([`ArtificialStress`](crate::momentum::ArtificialStress)), or none.
+    #[serde(default)]
+    pub artificial_stress: Option<f64>,
+    /// Smoothing lengths stay as set up instead of following the
+    /// neighbour count each step (the weakly compressible free-surface
+    /// choice: a particle's density then changes only as its neighbours
+    /// move). The neighbour search still iterates the h of a particle
+    /// whose count leaves `[ng0/4, ngmax + 1]`.
+    #[serde(default)]
+    pub fixed_h: bool,
 }
 
 impl Default for Scheme {
@@ -159,6 +171,8 @@ impl Scheme {
         av_form: AvForm::Paper,
         balsara: false,
         conductivity: None,
+        artificial_stress: None,
+        fixed_h: false,
     };
 
     /// What SPH-EXA's `std` propagator runs: the paper's scheme without
@@ -191,6 +205,8 @@ impl Scheme {
         av_form: AvForm::SphExa,
         balsara: false,
         conductivity: None,
+        artificial_stress: None,
+        fixed_h: false,
     };
 
     /// [`Scheme::VE`] without the grad-h terms and with the artificial
@@ -217,6 +233,8 @@ impl Scheme {
         av_form: AvForm::Paper,
         balsara: false,
         conductivity: None,
+        artificial_stress: None,
+        fixed_h: false,
     };
 
     /// The `evrard` case's scheme: kernel gradients, no grad-h, viscosity
@@ -232,6 +250,8 @@ impl Scheme {
         av_form: AvForm::Paper,
         balsara: false,
         conductivity: None,
+        artificial_stress: None,
+        fixed_h: false,
     };
 
     /// The preset called `name` (see [`PRESETS`]).

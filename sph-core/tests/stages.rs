@@ -5,7 +5,11 @@ use proptest::prelude::*;
 use sph_core::density::{density, Positions};
 use sph_core::iad::iad;
 use sph_core::integrate::integrate;
-use sph_core::momentum::{momentum_energy, Gradients, HydroState, PairFactors, Rates};
+use sph_core::momentum::{
+    momentum_energy_with, Alpha, ArtificialStress, Gradients, HydroState, MomentumScheme,
+    PairFactors, Rates,
+};
+use sph_core::AvForm;
 use sph_core::{Eos, FieldSet, Particles};
 use sph_kernels::{Sinc, Tabulated};
 use sph_tree::{
@@ -119,8 +123,23 @@ fn compute_iad(s: &mut Setup) {
 }
 
 fn compute_forces(s: &mut Setup, gradients: Gradients) {
+    compute_forces_with(s, gradients, None, false);
+}
+
+/// The forces with the artificial stress `stress`; with `tension` every
+/// pressure is negated (the sound speeds kept), as under a stiff EOS
+/// below its reference density.
+fn compute_forces_with(
+    s: &mut Setup,
+    gradients: Gradients,
+    stress: Option<ArtificialStress>,
+    tension: bool,
+) {
     let p = &mut s.p;
     Eos::IdealGas { gamma: 5.0 / 3.0 }.apply(&p.rho, &p.u, None, &mut p.p, &mut p.c);
+    if tension {
+        p.p.iter_mut().for_each(|x| *x = -*x);
+    }
     let pos = Positions {
         x: &p.x,
         y: &p.y,
@@ -147,16 +166,14 @@ fn compute_forces(s: &mut Setup, gradients: Gradients) {
     };
     let mut factors = PairFactors::default();
     factors.fill(&state);
-    momentum_energy(
-        &kernel(),
-        &s.bbox,
-        state,
-        &factors,
+    let scheme = MomentumScheme {
         gradients,
-        1.0,
-        &s.list,
-        rates,
-    );
+        alpha: Alpha::Constant(1.0),
+        av_form: AvForm::Paper,
+        xm: None,
+        stress,
+    };
+    momentum_energy_with(&kernel(), &s.bbox, state, &factors, scheme, &s.list, rates);
 }
 
 /// IAD gradient of f at particle i: sum_j V_j (f_j - f_i) C_i (x_j - x_i) W_ij.
@@ -246,9 +263,14 @@ proptest! {
 
     /// Pairwise antisymmetry: one force evaluation changes the total
     /// momentum by round-off only, and the pressure + viscous work balances
-    /// the kinetic energy change (total energy rate ~ 0).
+    /// the kinetic energy change (total energy rate ~ 0); also under
+    /// tension with the artificial stress.
     #[test]
-    fn forces_conserve_momentum_and_energy(seed in any::<u64>(), iad_grad in any::<bool>()) {
+    fn forces_conserve_momentum_and_energy(
+        seed in any::<u64>(),
+        iad_grad in any::<bool>(),
+        stressed in any::<bool>(),
+    ) {
         let mut s = lattice(10, 0.8, 60.0, seed);
         let mut rng = Rng(seed ^ 0xABCD);
         for i in 0..s.p.len() {
@@ -265,7 +287,8 @@ proptest! {
         let gradients = if iad_grad { Gradients::Iad } else { Gradients::Kernel };
         compute_density(&mut s);
         compute_iad(&mut s);
-        compute_forces(&mut s, gradients);
+        let stress = stressed.then(|| ArtificialStress::new(0.2, 60, &kernel()));
+        compute_forces_with(&mut s, gradients, stress, stressed);
         let p = &s.p;
         let mut mom = [0.0; 3];
         let mut scale = 0.0;
@@ -285,6 +308,61 @@ proptest! {
             prop_assert!(mom[k].abs() < 1e-13 * scale, "momentum {:e} vs {:e}", mom[k], scale);
         }
         prop_assert!(de.abs() < 1e-12 * de_scale, "energy rate {:e} vs {:e}", de, de_scale);
+    }
+}
+
+/// The artificial stress pushes apart a pair that closed in under
+/// tension, and changes nothing where no pressure is negative.
+#[test]
+fn artificial_stress_repels_a_close_pair_under_tension_only() {
+    let stress = ArtificialStress::new(0.2, 60, &kernel());
+    for gradients in [Gradients::Kernel, Gradients::Iad] {
+        let run = |stress: Option<ArtificialStress>, tension: bool| {
+            let mut s = lattice(10, 0.0, 60.0, 1);
+            // Particle 0 moved 0.4 spacings towards its nearest neighbour.
+            let i = 0;
+            let dist2 = |k: usize| {
+                let p = &s.p;
+                let r = s
+                    .bbox
+                    .min_image([p.x[i] - p.x[k], p.y[i] - p.y[k], p.z[i] - p.z[k]]);
+                r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
+            };
+            let j = (1..s.p.len())
+                .min_by(|&a, &b| dist2(a).total_cmp(&dist2(b)))
+                .unwrap();
+            let p = &mut s.p;
+            let d = s
+                .bbox
+                .min_image([p.x[j] - p.x[i], p.y[j] - p.y[i], p.z[j] - p.z[i]]);
+            p.x[i] += 0.4 * d[0];
+            p.y[i] += 0.4 * d[1];
+            p.z[i] += 0.4 * d[2];
+            p.u.iter_mut().for_each(|u| *u = 1.0);
+            let keys = std::mem::take(&mut s.keys);
+            rebuild_lists(&mut s, &keys);
+            compute_density(&mut s);
+            compute_iad(&mut s);
+            compute_forces_with(&mut s, gradients, stress, tension);
+            let away = [-d[0], -d[1], -d[2]];
+            let a = [s.p.ax[i], s.p.ay[i], s.p.az[i]];
+            (
+                a.iter().zip(&away).map(|(a, e)| a * e).sum::<f64>(),
+                s.p.ax.clone(),
+            )
+        };
+        let (plain, _) = run(None, true);
+        let (with, _) = run(Some(stress), true);
+        assert!(
+            with - plain > 0.1 * plain.abs(),
+            "{gradients:?}: push away {with:e} with stress, {plain:e} without"
+        );
+        let (_, ax_plain) = run(None, false);
+        let (_, ax_with) = run(Some(stress), false);
+        assert_eq!(
+            ax_plain, ax_with,
+            "{gradients:?}: stress acted at positive pressure"
+        );
     }
 }
 

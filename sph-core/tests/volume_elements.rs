@@ -226,6 +226,7 @@ fn forces(s: &mut Setup, alpha: Alpha<'_>) {
         alpha,
         av_form: AvForm::SphExa,
         xm: Some(&s.xm),
+        stress: None,
     };
     let rates = Rates {
         ax: &mut p.ax,

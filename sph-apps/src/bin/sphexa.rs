@@ -176,6 +176,14 @@ enum GradientArg {
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq)]
+enum SmoothingArg {
+    /// Follows the neighbour count every step.
+    Adaptive,
+    /// Stays as set up.
+    Fixed,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq)]
 enum Switch {
     /// Enabled.
     On,
@@ -285,6 +293,19 @@ struct RunArgs {
     /// scheme's (off in every preset).
     #[arg(long, allow_negative_numbers = true, value_parser = parse_non_negative)]
     conductivity: Option<f64>,
+    /// Artificial stress epsilon against the tensile instability (Monaghan
+    /// 2000): a repulsion between particles under negative pressure that
+    /// close in below the lattice spacing; a number >= 0 (0 = off; 0.2 is
+    /// Monaghan's value). Default: the case's (square-patch: 0.2; off
+    /// elsewhere).
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_non_negative)]
+    artificial_stress: Option<f64>,
+    /// Smoothing lengths: `adaptive` follows the neighbour count every
+    /// step; `fixed` keeps each particle's h as set up (weakly compressible
+    /// flows with a free surface). Default: the case's (square-patch:
+    /// fixed; adaptive elsewhere).
+    #[arg(long, value_enum)]
+    smoothing_length: Option<SmoothingArg>,
     /// Self-gravity: opening angle theta of the tree, a positive number
     /// (cases with gravity only).
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true,
@@ -878,6 +899,12 @@ fn scheme_options(s: &Scheme, softening: Option<f64>) -> String {
     if let Some(c) = s.conductivity {
         text += &format!(" --conductivity {c}");
     }
+    if let Some(e) = s.artificial_stress {
+        text += &format!(" --artificial-stress {e}");
+    }
+    if s.fixed_h {
+        text += " --smoothing-length fixed";
+    }
     if let Some(soft) = softening {
         text += &format!(" --softening {soft} (self-gravity)");
     }
@@ -937,6 +964,8 @@ fn scheme_overrides(a: &RunArgs) -> Result<SchemeOverrides, AppError> {
         alpha: a.alpha,
         av_switches: a.av_switches.map(|s| s == Switch::On),
         conductivity: a.conductivity,
+        artificial_stress: a.artificial_stress,
+        fixed_h: a.smoothing_length.map(|s| s == SmoothingArg::Fixed),
         softening: a.softening,
     })
 }
@@ -1192,6 +1221,14 @@ fn resolved_config(
     set("grad-h", on(s.grad_h));
     set("av-switches", on(s.switches().is_some()));
     set("conductivity", Value::Float(s.conductivity.unwrap_or(0.0)));
+    set(
+        "artificial-stress",
+        Value::Float(s.artificial_stress.unwrap_or(0.0)),
+    );
+    set(
+        "smoothing-length",
+        Value::String(if s.fixed_h { "fixed" } else { "adaptive" }.into()),
+    );
     set("theta", Value::Float(a.theta));
     if let Some(g) = config.gravity {
         set("softening", Value::Float(g.softening));

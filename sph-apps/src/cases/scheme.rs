@@ -27,7 +27,8 @@ impl Physics {
 
 /// What a run changes in a case's scheme (the command line's `--scheme`,
 /// `--gradients`, `--grad-h`, `--alpha`, `--av-switches`,
-/// `--conductivity`, `--softening`); `None` keeps the case's choice. The
+/// `--conductivity`, `--artificial-stress`, `--smoothing-length`,
+/// `--softening`); `None` keeps the case's choice. The
 /// default overrides nothing.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct SchemeOverrides {
@@ -44,6 +45,10 @@ pub struct SchemeOverrides {
     pub av_switches: Option<bool>,
     /// Artificial conductivity `alpha_u` (0: off).
     pub conductivity: Option<f64>,
+    /// Artificial stress `epsilon` (0: off).
+    pub artificial_stress: Option<f64>,
+    /// Whether smoothing lengths stay fixed.
+    pub fixed_h: Option<bool>,
     /// Self-gravity softening scale (cases with self-gravity).
     pub softening: Option<f64>,
 }
@@ -66,6 +71,12 @@ impl SchemeOverrides {
         }
         if let Some(c) = self.conductivity {
             s.conductivity = (c > 0.0).then_some(c);
+        }
+        if let Some(e) = self.artificial_stress {
+            s.artificial_stress = (e > 0.0).then_some(e);
+        }
+        if let Some(f) = self.fixed_h {
+            s.fixed_h = f;
         }
         s
     }
