@@ -991,9 +991,14 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         owned: Range<usize>,
     ) -> Result<NeighborStats, CoreError> {
         let h_limit = self.domain.h_limit();
+        let params = if self.config.scheme.fixed_h {
+            self.config.neighbors.without_iteration()
+        } else {
+            self.config.neighbors
+        };
         let run = |p: &mut Particles, list: &mut CompactNeighborList| {
             find_neighbors(
-                &self.config.neighbors,
+                &params,
                 self.config.h_update,
                 &self.tree,
                 bbox,

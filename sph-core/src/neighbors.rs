@@ -35,6 +35,24 @@ impl NeighborParams {
         nc * 4 < self.ng0 || nc.saturating_sub(1) > self.ngmax
     }
 
+    /// These targets with no count out of range: the search never
+    /// iterates h (fixed smoothing lengths).
+    ///
+    /// ```
+    /// use sph_core::NeighborParams;
+    /// let p = NeighborParams::default();
+    /// assert!(p.out_of_range(3) && p.out_of_range(400));
+    /// let fixed = p.without_iteration();
+    /// assert!(!fixed.out_of_range(1) && !fixed.out_of_range(100_000));
+    /// ```
+    pub fn without_iteration(self) -> Self {
+        Self {
+            ng0: 0,
+            ngmax: usize::MAX,
+            ..self
+        }
+    }
+
     /// The h update rule with this target.
     pub fn h_update(&self, base: HUpdate) -> HUpdate {
         HUpdate {
