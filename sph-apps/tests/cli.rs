@@ -263,3 +263,22 @@ fn a_wind_shock_box_too_thin_for_the_kernel_is_refused_with_the_least_size() {
     let e = refused(&["wind-shock", "-n", "16", "--steps", "1", "-q"]);
     assert_mentions(&e, &["wind-shock", "16", "ng0 = 100", "-n 28"]);
 }
+
+/// A reader that stops early (`sphexa cases | head -1`) ends the listing
+/// quietly: exit status 0, nothing on stderr, no panic.
+#[test]
+fn closed_stdout_ends_the_listing_quietly() {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_sphexa"))
+        .arg("cases")
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the sphexa binary runs");
+    // Close the read end before the child writes: its first line meets a
+    // broken pipe.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("sphexa finishes");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "status {:?}: {err}", out.status);
+    assert!(!err.contains("panicked"), "{err}");
+}

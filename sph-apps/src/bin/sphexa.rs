@@ -22,6 +22,21 @@ use std::process::ExitCode;
 
 /// Smoothed Particle Hydrodynamics (the SPH-EXA scheme), multi-threaded, and
 /// over MPI when built with `--features mpi` (`mpirun -n 4 sphexa run ...`).
+/// `println!` that ends the process quietly (exit status 0) when stdout
+/// is a closed pipe (`sphexa cases | head -1`), as Unix tools do, instead
+/// of panicking.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        if let Err(e) = writeln!(std::io::stdout(), $($arg)*) {
+            if e.kind() == std::io::ErrorKind::BrokenPipe {
+                std::process::exit(0);
+            }
+            panic!("writing to stdout: {e}");
+        }
+    }};
+}
+
 #[derive(Parser, Debug)]
 #[command(version, about, long_about = None)]
 struct Cli {
@@ -664,7 +679,7 @@ fn glass(a: GlassArgs) -> Result<(), AppError> {
     })?;
     write(&g, &path)?;
     let r = g.report;
-    println!(
+    say!(
         "{} particles, {} steps, {:.1} s: density scatter {:.4} -> {:.4}, closest pair {:.3} -> {:.3} spacings{}",
         g.pos.len(),
         r.steps,
@@ -675,7 +690,7 @@ fn glass(a: GlassArgs) -> Result<(), AppError> {
         r.min_pair,
         if r.rho_scatter > a.tolerance { " (tolerance not reached: raise --steps)" } else { "" }
     );
-    println!("wrote {}", path.display());
+    say!("wrote {}", path.display());
     Ok(())
 }
 
@@ -690,7 +705,7 @@ fn stress(a: StressArgs) -> Result<bool, AppError> {
     })?;
     print!("{}", sph_apps::stress::table(&outcomes));
     let failed = outcomes.iter().filter(|o| !o.pass).count();
-    println!(
+    say!(
         "{} of {} passed; {}",
         outcomes.len() - failed,
         outcomes.len(),
@@ -817,9 +832,16 @@ fn bench(a: BenchArgs) -> Result<(), AppError> {
     let report = Report::new(rows, reference);
     let title = format!("L1 against wall time: {}", names.join(", "));
     report.write(&out, &title)?;
-    println!(
+    say!(
         "{:<28} {:>9} {:>6} {:>10} {:>10} {:>10} {:>10} {:>9}",
-        "series", "N", "steps", "wall_s", "L1 rho", "L1 P", "L1 |v|", "RSS MB"
+        "series",
+        "N",
+        "steps",
+        "wall_s",
+        "L1 rho",
+        "L1 P",
+        "L1 |v|",
+        "RSS MB"
     );
     for sp in &report.spread {
         let r = report
@@ -827,7 +849,7 @@ fn bench(a: BenchArgs) -> Result<(), AppError> {
             .iter()
             .find(|r| r.series() == sp.series && r.n == sp.n)
             .expect("a spread has runs");
-        println!(
+        say!(
             "{:<28} {:>9} {:>6} {:>10.3} {:>10.4e} {:>10.4e} {:>10.4e} {:>9.0}",
             sp.series,
             sp.n,
@@ -840,12 +862,15 @@ fn bench(a: BenchArgs) -> Result<(), AppError> {
         );
     }
     for o in &report.orders {
-        println!(
+        say!(
             "order {:<28} {:<7} {:.3} (sizes {:?})",
-            o.series, o.field, o.order, o.sizes
+            o.series,
+            o.field,
+            o.order,
+            o.sizes
         );
     }
-    println!(
+    say!(
         "wrote {}, {}, {}",
         out.join("bench.csv").display(),
         out.join("bench.json").display(),
@@ -857,28 +882,30 @@ fn bench(a: BenchArgs) -> Result<(), AppError> {
 /// `sphexa cases`: one line per case, then its default scheme as the
 /// options that would select it.
 fn list_cases() {
-    println!(
+    say!(
         "{:<14} {:>6} {:>9}  description",
-        "case", "side", "end time"
+        "case",
+        "side",
+        "end time"
     );
     for c in cases::registry() {
-        println!(
+        say!(
             "{:<14} {:>6} {:>9}  {}",
             c.name(),
             c.default_side(),
             c.default_end_time(),
             c.description()
         );
-        println!(
+        say!(
             "{:<14} scheme: {}",
             "",
             scheme_options(&c.default_scheme(), c.physics().softening)
         );
     }
-    println!("\nscheme presets (sphexa run CASE --scheme NAME):");
+    say!("\nscheme presets (sphexa run CASE --scheme NAME):");
     for (name, scheme, what) in PRESETS {
-        println!("{name:<14} {what}");
-        println!("{:<14} {}", "", scheme_options(&scheme, None));
+        say!("{name:<14} {what}");
+        say!("{:<14} {}", "", scheme_options(&scheme, None));
     }
 }
 
@@ -1618,7 +1645,7 @@ fn run(a: RunArgs) -> Result<(), AppError> {
     if !root {
         return Ok(());
     }
-    println!(
+    say!(
         "{}: {} particles, {} steps to t = {:.4}, {:.1} s wall, {:.3e} particle-steps/s, peak RSS {:.0} MB",
         s.case,
         s.particles,
@@ -1629,21 +1656,23 @@ fn run(a: RunArgs) -> Result<(), AppError> {
         s.peak_rss_bytes as f64 / 1e6
     );
     if let Some(l1) = s.l1 {
-        println!("L1: rho {:.4e}  p {:.4e}  |v| {:.4e}", l1.rho, l1.p, l1.v);
+        say!("L1: rho {:.4e}  p {:.4e}  |v| {:.4e}", l1.rho, l1.p, l1.v);
     }
     if let (Some(r), Some(rr)) = (s.shock_radius, s.shock_radius_ref) {
-        println!(
+        say!(
             "shock radius {r:.4} (reference {rr:.4}), peak density {:.3}",
             s.peak_density
         );
     }
-    println!(
+    say!(
         "energy drift {:.3e}, momentum drift {:.3e}, angular momentum drift {:.3e}",
-        s.energy_rel_drift, s.momentum_rel_drift, s.angular_momentum_rel_drift
+        s.energy_rel_drift,
+        s.momentum_rel_drift,
+        s.angular_momentum_rel_drift
     );
     if ranks > 1 {
         let d = s.domain;
-        println!(
+        say!(
             "domain: {ranks} ranks, {}..{} particles per rank, halo ratio {:.3} (max {:.3}), {:.3e} bytes sent/step, sync {:.3e} s/step, communication {:.3e} s/step",
             d.owned_min, d.owned_max, d.halo_ratio_mean, d.halo_ratio_max,
             d.bytes_sent_per_step, d.sync_seconds_per_step, d.comm_seconds_per_step
