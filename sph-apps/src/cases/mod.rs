@@ -42,6 +42,7 @@ registry! {
     sedov::SedovBlast,
     noh::NohImplosion,
     square_patch::SquarePatch,
+    square_patch_slab::SquarePatchSlab,
     evrard::EvrardCollapse,
     sod::SodTube,
     gresho::GreshoVortex,

@@ -38,13 +38,31 @@ pub fn angular_momentum_exact() -> f64 {
 /// The seed paper's total angular momentum at t = 0.5 s (§4.6, Fig. 7).
 pub const ANGULAR_MOMENTUM_PAPER: f64 = 8.33e9;
 
-/// Per-particle terms of the clockwise angular momentum `-L_z = sum m (y v_x - x v_y)`.
+/// Per-particle terms of the clockwise angular momentum `-L_z = sum m (y
+/// v_x - x v_y)` and of the mass.
 fn angular_momentum_terms(p: &sph_core::Particles, i: usize, out: &mut [f64]) {
     out[0] = p.m[i] * (p.y[i] * p.vx[i] - p.x[i] * p.vy[i]);
+    out[1] = p.m[i];
 }
 
+/// `-L_z` of a slab `L` thick: `-L_z rho L^3 / M` (the patch's own `-L_z`
+/// when it is `L` thick, as [`SquarePatch`] is), comparable with
+/// [`ANGULAR_MOMENTUM_EXACT`] and the paper's figure for any thickness.
 fn angular_momentum(sums: &[f64]) -> Vec<f64> {
-    vec![sums[0]]
+    vec![sums[0] * RHO0 * L * L * L / sums[1]]
+}
+
+/// The patch's curve: `-L_z` (of a slab `L` thick) against the continuum's
+/// 8.3333e9 (t = 0) and the paper's 8.33e9 at t = 0.5 s.
+pub(crate) fn angular_momentum_curve() -> Curve {
+    Curve {
+        label: "angular momentum -L_z (g cm^2/s, slab 100 cm thick)",
+        columns: &["minus_Lz"],
+        sums: 2,
+        terms: angular_momentum_terms,
+        finish: angular_momentum,
+        reference: &[(0.0, ANGULAR_MOMENTUM_EXACT), (0.5, ANGULAR_MOMENTUM_PAPER)],
+    }
 }
 
 /// Initial pressure at `(x, y)` (origin at the centre of the square):
@@ -106,14 +124,7 @@ impl Case for SquarePatch {
     /// The clockwise angular momentum `-L_z` against the continuum's
     /// 8.3333e9 (t = 0) and the paper's 8.33e9 at t = 0.5 s.
     fn curve(&self) -> Option<Curve> {
-        Some(Curve {
-            label: "angular momentum -L_z (g cm^2/s)",
-            columns: &["minus_Lz"],
-            sums: 1,
-            terms: angular_momentum_terms,
-            finish: angular_momentum,
-            reference: &[(0.0, ANGULAR_MOMENTUM_EXACT), (0.5, ANGULAR_MOMENTUM_PAPER)],
-        })
+        Some(angular_momentum_curve())
     }
 
     /// The Tait EOS about each particle's initial state, sound speed
@@ -133,34 +144,48 @@ impl Case for SquarePatch {
         share: Share,
         _layout: &Layout,
     ) -> Result<InitialState, AppError> {
-        let n = side * side * side;
-        let dx = L / side as f64;
-        let (mut p, mine) = share.particles(n, field_set(config));
-        let h0 = initial_h(config.neighbors.ng0, L * L * L, n);
-        let m = RHO0 * L * L * L / n as f64;
-        let mut p_ref = vec![0.0; mine.len()];
-        for (k, i) in mine.clone().enumerate() {
-            let c = [i % side, i / side % side, i / (side * side)];
-            let q = c.map(|k| -0.5 * L + (k as f64 + 0.5) * dx);
-            (p.x[k], p.y[k], p.z[k]) = (q[0], q[1], q[2]);
-            (p.vx[k], p.vy[k]) = (OMEGA * q[1], -OMEGA * q[0]);
-            p.m[k] = m;
-            p.h[k] = h0;
-            p.u[k] = 1.0;
-            p_ref[k] = initial_pressure(q[0], q[1]);
-        }
-        // Reference density 0 = calibrate from the first density evaluation.
-        p.eos_ref = [vec![0.0; mine.len()], p_ref];
-        let bbox = BoundingBox::new(
-            [-0.5 * L; 3],
-            [0.5 * L; 3],
-            [Boundary::Open, Boundary::Open, Boundary::Periodic],
-        )?;
-        Ok(InitialState {
-            total: n,
-            particles: p,
-            bbox,
-            dt0: 1e-5,
-        })
+        patch_state(side, side, config, share)
     }
+}
+
+/// The patch as `side x side` particles per layer and `layers` layers of
+/// the same spacing `L / side`, periodic in z (a slab `layers L / side`
+/// thick).
+pub(crate) fn patch_state(
+    side: usize,
+    layers: usize,
+    config: &HydroConfig,
+    share: Share,
+) -> Result<InitialState, AppError> {
+    let n = side * side * layers;
+    let dx = L / side as f64;
+    let thickness = L * layers as f64 / side as f64;
+    let (mut p, mine) = share.particles(n, field_set(config));
+    let h0 = initial_h(config.neighbors.ng0, L * L * thickness, n);
+    let m = RHO0 * L * L * thickness / n as f64;
+    let mut p_ref = vec![0.0; mine.len()];
+    for (k, i) in mine.clone().enumerate() {
+        let c = [i % side, i / side % side, i / (side * side)];
+        let [x, y] = [c[0], c[1]].map(|k| -0.5 * L + (k as f64 + 0.5) * dx);
+        let z = -0.5 * thickness + (c[2] as f64 + 0.5) * dx;
+        (p.x[k], p.y[k], p.z[k]) = (x, y, z);
+        (p.vx[k], p.vy[k]) = (OMEGA * y, -OMEGA * x);
+        p.m[k] = m;
+        p.h[k] = h0;
+        p.u[k] = 1.0;
+        p_ref[k] = initial_pressure(x, y);
+    }
+    // Reference density 0 = calibrate from the first density evaluation.
+    p.eos_ref = [vec![0.0; mine.len()], p_ref];
+    let bbox = BoundingBox::new(
+        [-0.5 * L, -0.5 * L, -0.5 * thickness],
+        [0.5 * L, 0.5 * L, 0.5 * thickness],
+        [Boundary::Open, Boundary::Open, Boundary::Periodic],
+    )?;
+    Ok(InitialState {
+        total: n,
+        particles: p,
+        bbox,
+        dt0: 1e-5,
+    })
 }
