@@ -30,11 +30,6 @@ pub const MAX_MODE: u32 = 39;
 /// (clockwise: `L_z = -8.3333e9`).
 pub const ANGULAR_MOMENTUM_EXACT: f64 = RHO0 * OMEGA * L * L * L * L * L / 6.0;
 
-/// Exact angular momentum of the continuous patch, `rho omega H L^4 / 6`.
-pub fn angular_momentum_exact() -> f64 {
-    ANGULAR_MOMENTUM_EXACT
-}
-
 /// The seed paper's total angular momentum at t = 0.5 s (§4.6, Fig. 7).
 pub const ANGULAR_MOMENTUM_PAPER: f64 = 8.33e9;
 
