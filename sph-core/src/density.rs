@@ -158,6 +158,72 @@ pub fn ve_density<K: Kernel>(
     nl: &CompactNeighborList,
     out: VeOut<'_>,
 ) {
+    volume_density(kernel, bbox, pos, xm, true, nl, out);
+}
+
+/// As [`ve_density`] for pressure-energy volume elements `X_j = m_j u_j`
+/// (halos included), which do not depend on h: the grad-h factor is
+/// `Omega_i = 1 + h_i / (3 rho_i) (m_i / X_i) sum_j X_j dW/dh(r_ij, h_i)`,
+/// the derivative of `k_i m_i / X_i` through `k_i` alone.
+///
+/// ```
+/// use sph_core::density::{pressure_energy_density, Positions, VeOut};
+/// use sph_kernels::{CubicSpline, Kernel};
+/// use sph_tree::{compute_keys, Boundary, BoundingBox, CompactNeighborList, Curve};
+/// use sph_tree::{NeighborSearch, Octree};
+///
+/// // Two particles 0.5 apart, m = 1, one with u = 1 and one with u = 8.
+/// let (x, y, z) = (vec![0.25, 0.75], vec![0.5; 2], vec![0.5; 2]);
+/// let bbox = BoundingBox::cube(0.0, 1.0, Boundary::Open).unwrap();
+/// let mut keys = Vec::new();
+/// compute_keys(&bbox, Curve::Hilbert, &x, &y, &z, &mut keys);
+/// let (x, y, z, keys) = if keys[0] <= keys[1] {
+///     (x, y, z, keys)
+/// } else {
+///     (vec![0.75, 0.25], y, z, vec![keys[1], keys[0]])
+/// };
+/// let tree = Octree::build(&keys, &x, &y, &z, 4).unwrap();
+/// let (h, m) = (vec![0.4; 2], vec![1.0; 2]);
+/// let mut list = CompactNeighborList::new();
+/// NeighborSearch::default().find_compact(&tree, &bbox, &x, &y, &z, &h, 0..2, &mut list).unwrap();
+/// let xm = [1.0, 8.0]; // X = m u
+/// let (mut kx, mut rho, mut omega) = ([0.0; 2], [0.0; 2], [0.0; 2]);
+/// let pos = Positions { x: &x, y: &y, z: &z, h: &h, m: &m };
+/// let out = VeOut { kx: &mut kx, rho: &mut rho, omega: &mut omega };
+/// pressure_energy_density(&CubicSpline, &bbox, pos, &xm, &list, out);
+/// // k_i = sum_j X_j W(r_ij, h_i) (self included), rho_i = k_i m_i / X_i.
+/// let w = |r: f64| CubicSpline.w(r, 0.4);
+/// for (i, j) in [(0, 1), (1, 0)] {
+///     let k = xm[i] * w(0.0) + xm[j] * w(0.5);
+///     assert!((kx[i] - k).abs() < 1e-12 * k);
+///     assert!((rho[i] - k * m[i] / xm[i]).abs() < 1e-12 * rho[i]);
+/// }
+/// ```
+///
+/// # Panics
+/// If the arrays differ in length or do not cover the lists.
+pub fn pressure_energy_density<K: Kernel>(
+    kernel: &K,
+    bbox: &BoundingBox,
+    pos: Positions<'_>,
+    xm: &[f64],
+    nl: &CompactNeighborList,
+    out: VeOut<'_>,
+) {
+    volume_density(kernel, bbox, pos, xm, false, nl, out);
+}
+
+/// `k`, the density and Omega of volume elements `xm`; `x_of_h`: `X_i`
+/// depends on `h_i` as SPH-EXA's `m_i / rho0_i` does.
+fn volume_density<K: Kernel>(
+    kernel: &K,
+    bbox: &BoundingBox,
+    pos: Positions<'_>,
+    xm: &[f64],
+    x_of_h: bool,
+    nl: &CompactNeighborList,
+    out: VeOut<'_>,
+) {
     let driver = PairLoop::new(bbox, kernel.support(), [pos.x, pos.y, pos.z], pos.h, nl)
         .expect("ve density: positions");
     let n = pos.x.len();
@@ -178,6 +244,7 @@ pub fn ve_density<K: Kernel>(
             h,
             m,
             xm,
+            x_of_h,
         };
         driver.run(&stage, (kx_rho, None));
     } else {
@@ -188,6 +255,7 @@ pub fn ve_density<K: Kernel>(
             h,
             m,
             xm,
+            x_of_h,
         };
         driver.run(&stage, (kx_rho, Some([&mut out.omega[targets]])));
     }
@@ -203,6 +271,8 @@ struct VeDensity<'a, K, const GRAD_H: bool> {
     h: &'a [f64],
     m: &'a [f64],
     xm: &'a [f64],
+    /// Whether `X_i` depends on `h_i` (through the standard density).
+    x_of_h: bool,
 }
 
 impl<K: Kernel, const GRAD_H: bool> PairStage for VeDensity<'_, K, GRAD_H> {
@@ -243,7 +313,10 @@ impl<K: Kernel, const GRAD_H: bool> PairStage for VeDensity<'_, K, GRAD_H> {
         if let Some([o]) = omega {
             // dW/dh = -K/h^4 (3 w + v w'); the self term of k is K w(0) X_i / h^3.
             let h4 = h3 * inv_h;
-            let drho_dh = -(h4 * sx) * mi / xi - (kx - h3 * self.w0 * xi) * (h4 * sm);
+            let mut drho_dh = -(h4 * sx) * mi / xi;
+            if self.x_of_h {
+                drho_dh -= (kx - h3 * self.w0 * xi) * (h4 * sm);
+            }
             (1.0 + drho_dh / (3.0 * rho * inv_h)).store(o);
         }
     }

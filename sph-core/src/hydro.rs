@@ -6,13 +6,13 @@ use crate::av_switch::{
 };
 use crate::conduction::conduction;
 use crate::conserved::Conserved;
-use crate::density::{density, ve_density, xmass, Positions, VeOut};
+use crate::density::{density, pressure_energy_density, ve_density, xmass, Positions, VeOut};
 use crate::eos::Eos;
 use crate::iad::iad_volumes;
 use crate::integrate::{integrate, HUpdate};
 use crate::momentum::{
     momentum_energy_with, Alpha, ArtificialStress, Gradients, HydroState, MomentumScheme,
-    MomentumStats, PairFactors, Rates,
+    MomentumStats, PairFactors, Rates, VolumeWeights,
 };
 use crate::neighbors::{find_neighbors, NeighborParams};
 use crate::scheme::{Scheme, Viscosity, Volume};
@@ -560,9 +560,8 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 .exchange(&mut [c0, c1, c2, c3, c4, c5].map(|c| c.as_mut_slice()))?;
             clock.lap(Stage::Halos);
         }
-        let ve = self.config.scheme.volume == Volume::Generalised;
         self.factors
-            .fill_with(&hydro_state!(p), ve.then_some(self.kx.as_slice()));
+            .fill_with(&hydro_state!(p), self.config.scheme.volume, &self.kx);
         if self.config.scheme.needs_divergence() {
             self.switches(p, bbox, step, &mut clock, divergence_done)?;
         }
@@ -708,7 +707,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         let pos = positions!(p);
         let volumes = match self.config.scheme.volume {
             Volume::Mass => [&p.m[..], &p.rho[..]],
-            Volume::Generalised => [&self.xm[..], &self.kx[..]],
+            Volume::Generalised | Volume::PressureEnergy => [&self.xm[..], &self.kx[..]],
         };
         let result = if divergence {
             let n = p.len();
@@ -839,7 +838,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             gradients: s.gradients,
             alpha,
             av_form: s.av_form,
-            xm: (s.volume == Volume::Generalised).then_some(self.xm.as_slice()),
+            volumes: VolumeWeights::of(s.volume, &self.xm),
             stress: s
                 .artificial_stress
                 .map(|e| ArtificialStress::new(e, self.config.neighbors.ng0, &self.kernel)),
@@ -1052,14 +1051,31 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         let n = p.len();
         self.xm.resize(n, 0.0);
         self.kx.resize(n, 0.0);
-        xmass(&self.kernel, bbox, pos, &self.list, &mut self.xm);
-        self.domain.exchange(&mut [self.xm.as_mut_slice()])?;
+        if self.config.scheme.volume == Volume::PressureEnergy {
+            // X = m u, halos included (their u came with them).
+            for ((x, m), u) in self.xm.iter_mut().zip(&p.m).zip(&p.u) {
+                *x = m * u;
+            }
+            if let Some(i) = self.xm.iter().position(|&x| !(x > 0.0 && x.is_finite())) {
+                return Err(CoreError::Invalid(format!(
+                    "pressure-energy volumes need m u > 0: particle {} has m = {}, u = {} (use --volume mass or ve for cold gas)",
+                    p.id[i], p.m[i], p.u[i]
+                )));
+            }
+        } else {
+            xmass(&self.kernel, bbox, pos, &self.list, &mut self.xm);
+            self.domain.exchange(&mut [self.xm.as_mut_slice()])?;
+        }
         let out = VeOut {
             kx: &mut self.kx,
             rho: &mut p.rho,
             omega: &mut p.omega,
         };
-        ve_density(&self.kernel, bbox, positions!(p), &self.xm, &self.list, out);
+        if self.config.scheme.volume == Volume::PressureEnergy {
+            pressure_energy_density(&self.kernel, bbox, positions!(p), &self.xm, &self.list, out);
+        } else {
+            ve_density(&self.kernel, bbox, positions!(p), &self.xm, &self.list, out);
+        }
         Ok(())
     }
 
@@ -1070,7 +1086,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         if !p.omega.is_empty() {
             fields.push(&mut p.omega);
         }
-        if self.config.scheme.volume == Volume::Generalised {
+        if self.config.scheme.volume != Volume::Mass {
             fields.push(&mut self.kx);
         }
         self.domain.exchange(&mut fields)?;

@@ -30,6 +30,7 @@ use crate::pair_loop::{
     WithGradients, LANES,
 };
 pub use crate::scheme::AvForm;
+use crate::scheme::Volume;
 use rayon::prelude::*;
 use sph_kernels::Kernel;
 use sph_tree::{BoundingBox, CompactNeighborList};
@@ -92,14 +93,20 @@ pub struct PairFactors {
 impl PairFactors {
     /// Fills the factors of every particle of `s` (parallel).
     pub fn fill(&mut self, s: &HydroState<'_>) {
-        self.fill_with(s, None);
+        self.fill_with(s, Volume::Mass, &[]);
     }
 
-    /// As [`fill`](Self::fill); with the generalised volume elements'
-    /// normalisation `kx` (every particle), the pressure factor is
-    /// SPH-EXA's `P_i / (k_i m_i^2 Omega_i)`, which the pair loop
-    /// multiplies by the Atwood-blended `X` weights.
-    pub fn fill_with(&mut self, s: &HydroState<'_>, kx: Option<&[f64]>) {
+    /// As [`fill`](Self::fill) for the particle volumes `volume`, with
+    /// the volume elements' normalisation `kx` (every particle; unused
+    /// for [`Volume::Mass`]): the pressure factor is SPH-EXA's
+    /// `P_i / (k_i m_i^2 Omega_i)` for [`Volume::Generalised`], which the
+    /// pair loop multiplies by the Atwood-blended `X` weights, and
+    /// `P_i / (k_i^2 m_i Omega_i)` for [`Volume::PressureEnergy`], which
+    /// it multiplies by `X_i X_j / m_j`.
+    ///
+    /// # Panics
+    /// If `kx` is shorter than the state with volume elements.
+    pub fn fill_with(&mut self, s: &HydroState<'_>, volume: Volume, kx: &[f64]) {
         let n = s.rho.len();
         for v in [&mut self.inv_h, &mut self.inv_rho, &mut self.pre] {
             // Grow to what the particles need, not to twice the old size.
@@ -117,9 +124,10 @@ impl PairFactors {
                 let om = if s.omega.is_empty() { 1.0 } else { s.omega[i] };
                 *ih = 1.0 / s.pos.h[i];
                 *ir = 1.0 / s.rho[i];
-                *pre = match kx {
-                    None => s.p[i] * *ir * *ir / om,
-                    Some(k) => s.p[i] / (k[i] * s.pos.m[i] * s.pos.m[i] * om),
+                *pre = match volume {
+                    Volume::Mass => s.p[i] * *ir * *ir / om,
+                    Volume::Generalised => s.p[i] / (kx[i] * s.pos.m[i] * s.pos.m[i] * om),
+                    Volume::PressureEnergy => s.p[i] / (kx[i] * kx[i] * s.pos.m[i] * om),
                 };
             });
     }
@@ -150,7 +158,7 @@ pub fn momentum_energy<K: Kernel>(
         gradients,
         alpha: Alpha::Constant(alpha),
         av_form: AvForm::Paper,
-        xm: None,
+        volumes: VolumeWeights::Mass,
         stress: None,
     };
     momentum_energy_with(kernel, bbox, s, f, scheme, nl, out)
@@ -178,10 +186,43 @@ pub fn momentum_energy_switched<K: Kernel>(
         gradients,
         alpha: Alpha::PerParticle(alpha),
         av_form: AvForm::Paper,
-        xm: None,
+        volumes: VolumeWeights::Mass,
         stress: None,
     };
     momentum_energy_with(kernel, bbox, s, f, scheme, nl, out)
+}
+
+/// The particle volumes the momentum and energy equations weigh pairs
+/// with (see [`momentum_energy_with`]).
+#[derive(Debug, Clone, Copy)]
+pub enum VolumeWeights<'a> {
+    /// `m / rho`: the paper's equations.
+    Mass,
+    /// SPH-EXA's generalised volume elements `X` (every particle), with
+    /// the Atwood-blended weights.
+    Atwood(&'a [f64]),
+    /// Volume elements `X` (every particle) in Hopkins's (2013)
+    /// scale-free form: pair weights `X_i X_j`.
+    Product(&'a [f64]),
+}
+
+impl<'a> VolumeWeights<'a> {
+    /// The weights of `volume` with the elements `xm` (unused for
+    /// [`Volume::Mass`]).
+    pub fn of(volume: Volume, xm: &'a [f64]) -> Self {
+        match volume {
+            Volume::Mass => Self::Mass,
+            Volume::Generalised => Self::Atwood(xm),
+            Volume::PressureEnergy => Self::Product(xm),
+        }
+    }
+
+    fn elements(&self) -> Option<&'a [f64]> {
+        match *self {
+            Self::Mass => None,
+            Self::Atwood(x) | Self::Product(x) => Some(x),
+        }
+    }
 }
 
 /// The viscosity strength of the pairs.
@@ -203,9 +244,9 @@ pub struct MomentumScheme<'a> {
     pub alpha: Alpha<'a>,
     /// Viscosity and signal-velocity form.
     pub av_form: AvForm,
-    /// The generalised volume elements `X` of every particle (with
-    /// [`PairFactors::fill_with`] given their `k`), or none (`m / rho`).
-    pub xm: Option<&'a [f64]>,
+    /// The volumes the pressure terms are weighted with (with
+    /// [`PairFactors::fill_with`] given the same kind and their `k`).
+    pub volumes: VolumeWeights<'a>,
     /// Artificial stress against the tensile instability, or none.
     pub stress: Option<ArtificialStress>,
 }
@@ -288,7 +329,7 @@ pub fn momentum_energy_with<K: Kernel>(
             a.len()
         );
     }
-    if let Some(x) = scheme.xm {
+    if let Some(x) = scheme.volumes.elements() {
         assert!(x.len() >= n, "X has {} values for {n} particles", x.len());
     }
     let run = MomentumRun {
@@ -298,7 +339,7 @@ pub fn momentum_energy_with<K: Kernel>(
         f,
         alpha: scheme.alpha,
         av_form: scheme.av_form,
-        xm: scheme.xm,
+        volumes: scheme.volumes,
         stress: scheme.stress,
         nl,
         out,
@@ -319,7 +360,7 @@ struct MomentumRun<'a, K> {
     f: &'a PairFactors,
     alpha: Alpha<'a>,
     av_form: AvForm,
-    xm: Option<&'a [f64]>,
+    volumes: VolumeWeights<'a>,
     stress: Option<ArtificialStress>,
     nl: &'a CompactNeighborList,
     out: Rates<'a>,
@@ -342,26 +383,59 @@ impl<K: Kernel> WithGradients for MomentumRun<'_, K> {
             &mut o.du[r],
         ];
         let flow = Flow::new(self.kernel, &flow_state, IAD);
-        let xm = self.xm.map_or(&[][..], |x| &x[..n]);
+        let xm = self.volumes.elements().map_or(&[][..], |x| &x[..n]);
+        let product = matches!(self.volumes, VolumeWeights::Product(_));
         let sphexa = self.av_form == AvForm::SphExa;
         let stress = self.stress;
         macro_rules! go {
             ($sw:literal, $a:expr, $per:expr) => {
-                match (self.xm.is_some(), sphexa) {
+                match (!xm.is_empty(), sphexa) {
                     (false, false) => driver.run(
-                        &momentum::<K, IAD, $sw, false, false>(flow, f, n, $a, $per, xm, stress),
+                        &momentum::<K, IAD, $sw, false, false>(
+                            flow,
+                            f,
+                            n,
+                            $a,
+                            $per,
+                            (xm, product),
+                            stress,
+                        ),
                         out,
                     ),
                     (false, true) => driver.run(
-                        &momentum::<K, IAD, $sw, false, true>(flow, f, n, $a, $per, xm, stress),
+                        &momentum::<K, IAD, $sw, false, true>(
+                            flow,
+                            f,
+                            n,
+                            $a,
+                            $per,
+                            (xm, product),
+                            stress,
+                        ),
                         out,
                     ),
                     (true, false) => driver.run(
-                        &momentum::<K, IAD, $sw, true, false>(flow, f, n, $a, $per, xm, stress),
+                        &momentum::<K, IAD, $sw, true, false>(
+                            flow,
+                            f,
+                            n,
+                            $a,
+                            $per,
+                            (xm, product),
+                            stress,
+                        ),
                         out,
                     ),
                     (true, true) => driver.run(
-                        &momentum::<K, IAD, $sw, true, true>(flow, f, n, $a, $per, xm, stress),
+                        &momentum::<K, IAD, $sw, true, true>(
+                            flow,
+                            f,
+                            n,
+                            $a,
+                            $per,
+                            (xm, product),
+                            stress,
+                        ),
                         out,
                     ),
                 }
@@ -381,7 +455,7 @@ fn momentum<'a, K, const IAD: bool, const SWITCHED: bool, const VE: bool, const 
     n: usize,
     alpha: f64,
     alpha_per: &'a [f64],
-    xm: &'a [f64],
+    (xm, product): (&'a [f64], bool),
     stress: Option<ArtificialStress>,
 ) -> Momentum<'a, K, IAD, SWITCHED, VE, SPHEXA> {
     Momentum {
@@ -392,6 +466,7 @@ fn momentum<'a, K, const IAD: bool, const SWITCHED: bool, const VE: bool, const 
         alpha,
         alpha_per,
         xm,
+        product,
         stress,
     }
 }
@@ -409,6 +484,9 @@ struct Momentum<'a, K, const IAD: bool, const SWITCHED: bool, const VE: bool, co
     alpha: f64,
     alpha_per: &'a [f64],
     xm: &'a [f64],
+    /// Weights `X_i X_j` ([`VolumeWeights::Product`]) instead of the
+    /// Atwood blend.
+    product: bool,
     stress: Option<ArtificialStress>,
 }
 
@@ -476,6 +554,8 @@ struct MomentumSums {
     /// Density and volume element of the targets (volume elements only).
     rho_i: F64s,
     xm_i: F64s,
+    /// `1 / m_i` (weights `X_i X_j` only).
+    inv_m_i: F64s,
     ci_m: [F64s; 6],
     acc_a: [F64s; 3],
     /// `sum_j m_j v_ij . A_ij(h_i)`
@@ -520,6 +600,11 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool, const VE: bool, const SPH
             }),
             rho_i: if VE { g.load(self.flow.rho) } else { zero },
             xm_i: if VE { g.load(self.xm) } else { zero },
+            inv_m_i: if VE && self.product {
+                F64s::splat(1.0) / g.load(self.flow.m)
+            } else {
+                zero
+            },
             ci_m: if IAD {
                 self.flow.iad.map(|c| g.load(c))
             } else {
@@ -606,7 +691,13 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool, const VE: bool, const SPH
             vj_r += half;
         }
         let (ci_f, cj_f, a_mom) = if VE {
-            let (a, b) = atwood_weights(t.rho_i, self.flow.rho[j], t.xm_i, self.xm[j]);
+            let (a, b) = if self.product {
+                // X_i X_j / m_j and, for the j side, X_i X_j / m_i.
+                let cross = t.xm_i * self.xm[j];
+                (cross * (1.0 / self.flow.m[j]), cross * t.inv_m_i)
+            } else {
+                atwood_weights(t.rho_i, self.flow.rho[j], t.xm_i, self.xm[j])
+            };
             (t.pre_i * a + vi_r, self.pre[j] * b + vj_r, a)
         } else {
             (t.pre_i + vi_r, self.pre[j] + vj_r, F64s::splat(1.0))

@@ -58,6 +58,16 @@ pub enum Volume {
     /// ([`density::ve_density`](crate::density::ve_density),
     /// [`momentum`](crate::momentum)).
     Generalised,
+    /// Pressure-energy volumes (Saitoh & Makino 2013, Hopkins 2013):
+    /// `X_i = m_i u_i`, so `k_i = sum_j m_j u_j W_ij` is the smoothed
+    /// `P / (gamma - 1)` and stays smooth across a contact discontinuity
+    /// where the mass-weighted density jumps; `rho_i = k_i m_i / X_i`,
+    /// volumes `V_j = X_j / k_j`, and the momentum and energy equations
+    /// in Hopkins's scale-free form (pair weights `X_i X_j / (k_i^2 m_i)`,
+    /// see [`momentum`](crate::momentum)). For contacts and shear layers
+    /// in pressure equilibrium (isobaric cube, Kelvin-Helmholtz); it needs
+    /// `u > 0` everywhere.
+    PressureEnergy,
 }
 
 /// The form of the artificial viscosity and of the Courant signal
@@ -130,7 +140,7 @@ impl Default for Scheme {
 }
 
 /// The named schemes: (name, scheme, one line on what it is).
-pub const PRESETS: [(&str, Scheme, &str); 6] = [
+pub const PRESETS: [(&str, Scheme, &str); 7] = [
     (
         "paper",
         Scheme::PAPER,
@@ -150,6 +160,11 @@ pub const PRESETS: [(&str, Scheme, &str); 6] = [
         "ve-ac",
         Scheme::VE_AC,
         "`ve` without grad-h, with artificial conductivity alpha_u = 1: lower Sedov L1 rho, P and |v| than SPH-EXA's `ve` at 30^3, 40^3 and 50^3",
+    ),
+    (
+        "contact",
+        Scheme::CONTACT,
+        "contacts in pressure equilibrium: pressure-energy volumes (X = m u), kernel gradients, grad-h, constant alpha = 1 (the isobaric cube's)",
     ),
     (
         "noh",
@@ -221,6 +236,20 @@ impl Scheme {
         grad_h: false,
         conductivity: Some(1.0),
         ..Scheme::VE
+    };
+
+    /// The `isobaric-cube` case's scheme: the paper's with pressure-energy
+    /// volumes ([`Volume::PressureEnergy`]) and kernel gradients. A
+    /// density jump at one pressure keeps one smoothed pressure, so the
+    /// contact feels no spurious force; kernel gradients keep the pair
+    /// weights of two lattices of different spacing symmetric where IAD
+    /// matrices of the two sides differ. Isobaric cube, v_rms / c at
+    /// t = 1: 0.018 / 0.010 / 0.0085 at 16, 24 and 32 particles per side
+    /// (the paper's scheme: 0.067 at 16, 0.062 at 24).
+    pub const CONTACT: Scheme = Scheme {
+        gradients: Gradients::Kernel,
+        volume: Volume::PressureEnergy,
+        ..Scheme::PAPER
     };
 
     /// The `noh` case's scheme: kernel gradients, grad-h, viscosity

@@ -7,7 +7,7 @@ use sph_core::iad::iad;
 use sph_core::integrate::integrate;
 use sph_core::momentum::{
     momentum_energy_with, Alpha, ArtificialStress, Gradients, HydroState, MomentumScheme,
-    PairFactors, Rates,
+    PairFactors, Rates, VolumeWeights,
 };
 use sph_core::AvForm;
 use sph_core::{Eos, FieldSet, Particles};
@@ -170,7 +170,7 @@ fn compute_forces_with(
         gradients,
         alpha: Alpha::Constant(1.0),
         av_form: AvForm::Paper,
-        xm: None,
+        volumes: VolumeWeights::Mass,
         stress,
     };
     momentum_energy_with(&kernel(), &s.bbox, state, &factors, scheme, &s.list, rates);

@@ -13,7 +13,7 @@ use sph_apps::watch::{Bounds, Watch, GRAVITY_MOMENTUM_BOUND};
 use sph_apps::{AppError, Simulation};
 use sph_comm::Communicator;
 use sph_core::PRESETS;
-use sph_core::{Gradients, HydroConfig};
+use sph_core::{Gradients, HydroConfig, Volume};
 use sph_kernels::{FastKernel, KernelChoice};
 use sph_tree::Curve;
 use std::ffi::OsString;
@@ -191,6 +191,17 @@ enum GradientArg {
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq)]
+enum VolumeArg {
+    /// m / rho: the seed paper's.
+    Mass,
+    /// SPH-EXA's generalised volume elements, X = m / rho0 (needs IAD).
+    Ve,
+    /// Pressure-energy volumes, X = m u: a pressure that stays smooth
+    /// across contact discontinuities (needs u > 0).
+    PressureEnergy,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq)]
 enum SmoothingArg {
     /// Follows the neighbour count every step.
     Adaptive,
@@ -272,7 +283,8 @@ struct RunArgs {
     /// (the seed paper's eqs. 1-5: IAD, grad-h, constant alpha = 1), `std`
     /// (SPH-EXA's std: as paper without grad-h), `ve` (SPH-EXA's default:
     /// volume elements, grad-h, IAD, its switches), `ve-ac` (ve without
-    /// grad-h, with conductivity 1), `noh` (kernel gradients, grad-h,
+    /// grad-h, with conductivity 1), `contact` (pressure-energy volumes,
+    /// kernel gradients, grad-h, alpha = 1), `noh` (kernel gradients, grad-h,
     /// switches up to alpha 0.7), `evrard` (kernel gradients, no grad-h,
     /// switches up to alpha 0.5); `sphexa cases` lists them. The options
     /// below override it one by one.
@@ -321,6 +333,9 @@ struct RunArgs {
     /// fixed; adaptive elsewhere).
     #[arg(long, value_enum)]
     smoothing_length: Option<SmoothingArg>,
+    /// Particle volumes (default: the case's, see `sphexa cases`).
+    #[arg(long, value_enum)]
+    volume: Option<VolumeArg>,
     /// Self-gravity: opening angle theta of the tree, a positive number
     /// (cases with gravity only).
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true,
@@ -932,10 +947,22 @@ fn scheme_options(s: &Scheme, softening: Option<f64>) -> String {
     if s.fixed_h {
         text += " --smoothing-length fixed";
     }
+    if s.volume != Volume::Mass {
+        text += &format!(" --volume {}", volume_name(s.volume));
+    }
     if let Some(soft) = softening {
         text += &format!(" --softening {soft} (self-gravity)");
     }
     text
+}
+
+/// The `--volume` value of `v`.
+fn volume_name(v: Volume) -> &'static str {
+    match v {
+        Volume::Mass => "mass",
+        Volume::Generalised => "ve",
+        Volume::PressureEnergy => "pressure-energy",
+    }
 }
 
 /// Checks the scheme the run will use (the case's with the command line's
@@ -993,6 +1020,11 @@ fn scheme_overrides(a: &RunArgs) -> Result<SchemeOverrides, AppError> {
         conductivity: a.conductivity,
         artificial_stress: a.artificial_stress,
         fixed_h: a.smoothing_length.map(|s| s == SmoothingArg::Fixed),
+        volume: a.volume.map(|v| match v {
+            VolumeArg::Mass => Volume::Mass,
+            VolumeArg::Ve => Volume::Generalised,
+            VolumeArg::PressureEnergy => Volume::PressureEnergy,
+        }),
         softening: a.softening,
     })
 }
@@ -1256,6 +1288,7 @@ fn resolved_config(
         "smoothing-length",
         Value::String(if s.fixed_h { "fixed" } else { "adaptive" }.into()),
     );
+    set("volume", Value::String(volume_name(s.volume).into()));
     set("theta", Value::Float(a.theta));
     if let Some(g) = config.gravity {
         set("softening", Value::Float(g.softening));

@@ -46,9 +46,10 @@ impl Case for IsobaricCube {
         }
     }
 
-    /// The paper's scheme.
+    /// Pressure-energy volumes ([`Scheme::CONTACT`]): the cube's contact
+    /// keeps one smoothed pressure.
     fn default_scheme(&self) -> Scheme {
-        Scheme::PAPER
+        Scheme::CONTACT
     }
 
     /// The thin lattice (spacing `1/side`) without the cells of the inner

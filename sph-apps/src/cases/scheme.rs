@@ -3,7 +3,7 @@
 //! are written into a [`HydroConfig`].
 
 pub use sph_core::Scheme;
-use sph_core::{Eos, Gradients, HydroConfig};
+use sph_core::{Eos, Gradients, HydroConfig, Volume};
 use sph_gravity::GravityParams;
 
 /// The physics of a case besides its scheme: the equation of state and
@@ -49,6 +49,8 @@ pub struct SchemeOverrides {
     pub artificial_stress: Option<f64>,
     /// Whether smoothing lengths stay fixed.
     pub fixed_h: Option<bool>,
+    /// Particle volumes.
+    pub volume: Option<Volume>,
     /// Self-gravity softening scale (cases with self-gravity).
     pub softening: Option<f64>,
 }
@@ -77,6 +79,9 @@ impl SchemeOverrides {
         }
         if let Some(f) = self.fixed_h {
             s.fixed_h = f;
+        }
+        if let Some(v) = self.volume {
+            s.volume = v;
         }
         s
     }
