@@ -83,13 +83,19 @@ impl Default for GlassSpec {
 }
 
 impl GlassSpec {
-    /// The cache file's name, e.g. `glass_16_sinc6_ng100_150.h5`.
+    /// The cache file's name, e.g. `glass_16_sinc6_ng100_150.h5`; a
+    /// decimal point in the kernel's exponent becomes `p` (`sinc:6.5` is
+    /// `sinc6p5`, not the `sinc65` of `sinc:65`).
     pub fn file_name(&self) -> String {
         let kernel: String = self
             .kernel
             .to_string()
             .chars()
-            .filter(char::is_ascii_alphanumeric)
+            .filter_map(|c| match c {
+                '.' => Some('p'),
+                c if c.is_ascii_alphanumeric() => Some(c),
+                _ => None,
+            })
             .collect();
         format!(
             "glass_{}_{kernel}_ng{}_{}.h5",

@@ -1,4 +1,4 @@
-//! Process-wide allocator setting for long runs.
+//! Process-wide allocator settings for long runs.
 //!
 //! glibc's malloc serves large blocks with their own `mmap` at first, but
 //! after the first such block is freed it raises that threshold to the
@@ -37,6 +37,39 @@ pub fn return_large_buffers_to_os() {
             // other thread is started. Measured gain in the module docs.
             unsafe {
                 mallopt(M_MMAP_THRESHOLD, MMAP_THRESHOLD as c_int);
+            }
+        }
+    }
+}
+
+/// Hands the free pages inside glibc's heaps back to the OS
+/// (`malloc_trim(0)`); the simulation loop calls it after every step.
+///
+/// Small allocations (below [`MMAP_THRESHOLD`]) come from the heap, and
+/// the step's short-lived ones, freed between longer-lived ones, leave
+/// holes that later requests do not fill: the heap grows step after step
+/// while the bytes in use stay flat. Measured (Sedov 40^3, 1 rank x 2
+/// threads, main arena by `mallinfo2`): 1.5 MiB in use throughout, free
+/// holes 0.8 MiB after step 1 and 15 MiB after step 275; peak RSS by
+/// `/usr/bin/time -v` 30.5 MiB after 50 steps and 41.4 MiB after 300
+/// without the trim, 27.9 and 30.2 MiB with it (wall time within noise,
+/// 21.5 s against 21.8 s for 300 steps). Does nothing on other C
+/// libraries.
+pub fn return_free_heap_to_os() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        #[allow(unsafe_code)]
+        {
+            extern "C" {
+                fn malloc_trim(pad: usize) -> std::ffi::c_int;
+            }
+            // SAFETY: `malloc_trim` takes a plain integer and only releases
+            // free pages of the C allocator's own heaps (madvise), which no
+            // live allocation occupies; glibc locks each arena while it
+            // walks it, so other threads may allocate meanwhile. Measured
+            // gain in the doc comment above.
+            unsafe {
+                malloc_trim(0);
             }
         }
     }

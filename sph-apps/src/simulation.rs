@@ -438,6 +438,7 @@ impl<C: Communicator> Simulation<C> {
                 Ok(r) => r,
                 Err(e) => return Err(watch::locate(e, &self.scene.particles, self.hydro.owned())),
             };
+            crate::memory::return_free_heap_to_os();
             first.get_or_insert(r.conserved);
             energies.push(r.t, &r.conserved);
             totals.record(&r);

@@ -180,3 +180,31 @@ fn relaxation_is_the_same_on_one_and_two_threads() {
         .zip(&two.pos)
         .all(|(a, b)| (0..3).all(|k| a[k].to_bits() == b[k].to_bits())));
 }
+
+/// Every kernel spelling gets its own cache file: `sinc:6.5` and `sinc:65`
+/// once both read `sinc65`.
+#[test]
+fn cache_names_tell_kernels_apart() {
+    let with = |k: &str| {
+        GlassSpec {
+            kernel: k.parse().expect("kernel"),
+            ..GlassSpec::default()
+        }
+        .file_name()
+    };
+    assert_eq!(with("sinc:6"), "glass_16_sinc6_ng100_150.h5");
+    assert_ne!(with("sinc:6.5"), with("sinc:65"));
+    let names = [
+        "sinc:6",
+        "sinc:6.5",
+        "sinc:65",
+        "m4",
+        "wendland-c2",
+        "wendland-c4",
+        "wendland-c6",
+    ];
+    let mut files: Vec<String> = names.iter().map(|k| with(k)).collect();
+    files.sort();
+    files.dedup();
+    assert_eq!(files.len(), names.len(), "{files:?}");
+}

@@ -199,6 +199,78 @@ impl Particles {
         v
     }
 
+    /// The integrator's history (`dx`, `dy`, `dz`, `du_prev`): persistent
+    /// for owned particles, never read for halos, so halos travel without
+    /// it ([`HISTORY_FIELDS`] words fewer).
+    fn history(&self) -> [&Vec<f64>; HISTORY_FIELDS] {
+        [&self.dx, &self.dy, &self.dz, &self.du_prev]
+    }
+
+    /// Appends one packed particle; a `halo` comes without the integrator
+    /// history (zeros there).
+    fn push_words(&mut self, words: &[u64], halo: bool) {
+        let with_ref = !self.eos_ref[0].is_empty();
+        self.id.push(words[0]);
+        let mut w = words[1..].iter().map(|&b| f64::from_bits(b));
+        let mut next = || w.next().expect("packed particle too short");
+        for f in [
+            &mut self.x,
+            &mut self.y,
+            &mut self.z,
+            &mut self.vx,
+            &mut self.vy,
+            &mut self.vz,
+        ] {
+            f.push(next());
+        }
+        for f in [&mut self.dx, &mut self.dy, &mut self.dz] {
+            f.push(if halo { 0.0 } else { next() });
+        }
+        for f in [&mut self.h, &mut self.m, &mut self.u] {
+            f.push(next());
+        }
+        self.du_prev.push(if halo { 0.0 } else { next() });
+        self.push_rest(&mut w, with_ref);
+    }
+
+    /// The optional persistent fields from the rest of a packed particle,
+    /// and zeros (Omega: 1) in every recomputed field.
+    fn push_rest(&mut self, w: &mut impl Iterator<Item = f64>, with_ref: bool) {
+        if with_ref {
+            for f in self.eos_ref.iter_mut() {
+                f.push(w.next().expect("packed particle too short"));
+            }
+        }
+        if self.alpha_on {
+            self.alpha
+                .push(w.next().expect("packed particle too short"));
+        }
+        // Recomputed every step before use.
+        for f in [
+            &mut self.rho,
+            &mut self.p,
+            &mut self.c,
+            &mut self.ax,
+            &mut self.ay,
+            &mut self.az,
+            &mut self.du,
+        ] {
+            f.push(0.0);
+        }
+        if self.fields.grad_h {
+            self.omega.push(1.0);
+        }
+        if self.fields.gravity {
+            self.phi.push(0.0);
+        }
+        if self.fields.iad {
+            for f in self.iad.iter_mut() {
+                f.push(0.0);
+            }
+        }
+        self.nc.push(0);
+    }
+
     /// The fields that carry state from one step to the next (everything
     /// else is recomputed each step): what migration and halos move.
     fn persistent(&self) -> impl Iterator<Item = &Vec<f64>> + '_ {
@@ -361,6 +433,9 @@ impl Particles {
     }
 }
 
+/// Fields of the integrator's history (see `Particles::history`).
+const HISTORY_FIELDS: usize = 4;
+
 impl ParticleFields for Particles {
     fn len(&self) -> usize {
         self.x.len()
@@ -388,59 +463,25 @@ impl ParticleFields for Particles {
     }
 
     fn push_packed(&mut self, words: &[u64]) {
-        let with_ref = !self.eos_ref[0].is_empty();
-        self.id.push(words[0]);
-        let mut w = words[1..].iter().map(|&b| f64::from_bits(b));
-        let mut next = || w.next().expect("packed particle too short");
-        for f in [
-            &mut self.x,
-            &mut self.y,
-            &mut self.z,
-            &mut self.vx,
-            &mut self.vy,
-            &mut self.vz,
-            &mut self.dx,
-            &mut self.dy,
-            &mut self.dz,
-            &mut self.h,
-            &mut self.m,
-            &mut self.u,
-            &mut self.du_prev,
-        ] {
-            f.push(next());
-        }
-        if with_ref {
-            for f in self.eos_ref.iter_mut() {
-                f.push(next());
-            }
-        }
-        if self.alpha_on {
-            self.alpha.push(next());
-        }
-        // Recomputed every step before use.
-        for f in [
-            &mut self.rho,
-            &mut self.p,
-            &mut self.c,
-            &mut self.ax,
-            &mut self.ay,
-            &mut self.az,
-            &mut self.du,
-        ] {
-            f.push(0.0);
-        }
-        if self.fields.grad_h {
-            self.omega.push(1.0);
-        }
-        if self.fields.gravity {
-            self.phi.push(0.0);
-        }
-        if self.fields.iad {
-            for f in self.iad.iter_mut() {
-                f.push(0.0);
-            }
-        }
-        self.nc.push(0);
+        self.push_words(words, false);
+    }
+
+    fn halo_words(&self) -> usize {
+        self.packed_words() - HISTORY_FIELDS
+    }
+
+    fn pack_halo(&self, i: usize, out: &mut Vec<u64>) {
+        out.push(self.id[i]);
+        let history = self.history();
+        out.extend(
+            self.persistent()
+                .filter(|f| !history.iter().any(|h| std::ptr::eq(*h, *f)))
+                .map(|f| f[i].to_bits()),
+        );
+    }
+
+    fn push_halo(&mut self, words: &[u64]) {
+        self.push_words(words, true);
     }
 
     fn keep(&mut self, range: Range<usize>) {

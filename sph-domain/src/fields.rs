@@ -29,6 +29,22 @@ pub trait ParticleFields {
     fn pack(&self, i: usize, out: &mut Vec<u64>);
     /// Appends one particle from `packed_words()` words.
     fn push_packed(&mut self, words: &[u64]);
+    /// Words per packed halo. A halo is a read-only copy for one step,
+    /// dropped at the next sync, so a container may leave out what only
+    /// the owner uses (integrator history). Default: [`packed_words`](Self::packed_words).
+    fn halo_words(&self) -> usize {
+        self.packed_words()
+    }
+    /// Appends particle `i`, packed as a halo, to `out`. Default:
+    /// [`pack`](Self::pack).
+    fn pack_halo(&self, i: usize, out: &mut Vec<u64>) {
+        self.pack(i, out);
+    }
+    /// Appends one halo from `halo_words()` words. Default:
+    /// [`push_packed`](Self::push_packed).
+    fn push_halo(&mut self, words: &[u64]) {
+        self.push_packed(words);
+    }
     /// Makes room for `additional` more particles before a run of
     /// [`push_packed`](Self::push_packed). The domain calls it with the exact
     /// count of arrivals, so a container can grow its arrays to what they
