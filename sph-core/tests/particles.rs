@@ -36,3 +36,47 @@ proptest! {
         }
     }
 }
+
+proptest! {
+    /// A packed particle comes back with every persistent field; a packed
+    /// halo with every field but the integrator's history (zeros there),
+    /// in fewer words, with and without the optional persistent fields.
+    #[test]
+    fn halos_travel_without_the_integrator_history(seed in any::<u64>(), switches in any::<bool>()) {
+        let fields = FieldSet { grad_h: true, iad: true, ..FieldSet::default() };
+        let mut p = Particles::new(1, fields);
+        if switches {
+            p.enable_alpha(0.0);
+        }
+        let v = |k: u64| (seed.wrapping_mul(k + 1) % 1000) as f64 + 0.5;
+        for (k, f) in [&mut p.x, &mut p.y, &mut p.z, &mut p.vx, &mut p.vy, &mut p.vz, &mut p.dx, &mut p.dy,
+                       &mut p.dz, &mut p.h, &mut p.m, &mut p.u, &mut p.du_prev].into_iter().enumerate() {
+            f[0] = v(k as u64);
+        }
+        if switches {
+            p.alpha[0] = 0.25;
+        }
+        p.id[0] = seed;
+        let (mut full, mut halo) = (Vec::new(), Vec::new());
+        p.pack(0, &mut full);
+        p.pack_halo(0, &mut halo);
+        prop_assert_eq!(full.len(), p.packed_words());
+        prop_assert_eq!(halo.len(), p.halo_words());
+        prop_assert_eq!(p.packed_words() - p.halo_words(), 4);
+        p.push_packed(&full);
+        p.push_halo(&halo);
+        prop_assert!(p.check(fields).is_ok());
+        for f in [&p.x, &p.y, &p.z, &p.vx, &p.vy, &p.vz, &p.h, &p.m, &p.u] {
+            prop_assert_eq!(f[1], f[0]);
+            prop_assert_eq!(f[2], f[0]);
+        }
+        for f in [&p.dx, &p.dy, &p.dz, &p.du_prev] {
+            prop_assert_eq!(f[1], f[0]);
+            prop_assert_eq!(f[2], 0.0);
+        }
+        prop_assert_eq!(p.id[2], seed);
+        if switches {
+            prop_assert_eq!(p.alpha[2], 0.25);
+        }
+    }
+}
