@@ -193,6 +193,7 @@ fn benches(c: &mut Criterion) {
                             &mut c6,
                             &mut div_v,
                             &mut [],
+                            &mut [],
                         )
                         .is_ok(),
                     )
@@ -200,7 +201,16 @@ fn benches(c: &mut Criterion) {
             });
             g.bench_function("av_switches_iad", |b| {
                 b.iter(|| {
-                    velocity_divergence(&kernel, &bbox, flow, grad, &list, &mut div_v, &mut []);
+                    velocity_divergence(
+                        &kernel,
+                        &bbox,
+                        flow,
+                        grad,
+                        &list,
+                        &mut div_v,
+                        &mut [],
+                        &mut [],
+                    );
                     update_alpha(
                         &kernel, &bbox, flow, grad, &div_v, &params, 1e-4, &list, &mut alpha,
                     );

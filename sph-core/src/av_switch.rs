@@ -339,7 +339,12 @@ type GradientSums = ([F64s; 3], F64s, [[F64s; 3]; 3]);
 
 impl<K: Kernel, const IAD: bool> PairStage for VelocityGradient<'_, K, IAD> {
     type Sums = GradientSums;
-    type Out<'o> = ([&'o mut [f64]; 1], Option<[&'o mut [f64]; 1]>);
+    /// `div v`, optionally `|curl v|`, optionally the symmetric gradient
+    /// `(G_xx, G_xy, G_xz, G_yy, G_yz, G_zz)`, `G_ab = (d_a v_b + d_b v_a) / 2`.
+    type Out<'o> = (
+        [&'o mut [f64]; 1],
+        (Option<[&'o mut [f64]; 1]>, Option<[&'o mut [f64]; 6]>),
+    );
     type Stats = ();
 
     #[inline(always)]
@@ -390,7 +395,7 @@ impl<K: Kernel, const IAD: bool> VelocityGradient<'_, K, IAD> {
         &self,
         c: [F64s; 6],
         (_, inv_h, m): GradientSums,
-        ([dv], cv): <Self as PairStage>::Out<'_>,
+        ([dv], (cv, sym)): <Self as PairStage>::Out<'_>,
     ) {
         let f = &self.0;
         let k3 = f.norm * inv_h * inv_h * inv_h;
@@ -421,6 +426,14 @@ impl<K: Kernel, const IAD: bool> VelocityGradient<'_, K, IAD> {
                 .sqrt()
                 .store(cv);
         }
+        if let Some([xx, xy, xz, yy, yz, zz]) = sym {
+            gr[0][0].store(xx);
+            (0.5 * (gr[0][1] + gr[1][0])).store(xy);
+            (0.5 * (gr[0][2] + gr[2][0])).store(xz);
+            gr[1][1].store(yy);
+            (0.5 * (gr[1][2] + gr[2][1])).store(yz);
+            gr[2][2].store(zz);
+        }
     }
 }
 
@@ -436,10 +449,14 @@ impl<K: Kernel, const IAD: bool> VelocityGradient<'_, K, IAD> {
 /// for a linear velocity field) or `A_ij = grad_i W(r_ij, h_i)`
 /// ([`Gradients::Kernel`]). Reads positions, `h`, `m`, `rho`, `v` of the
 /// targets and their neighbours and `C` of the targets; writes
-/// `div_v[i]` (and `curl_v[i]`) for the targets only.
+/// `div_v[i]` (and `curl_v[i]`) for the targets only. When `grad_v` holds
+/// six fields they receive the symmetric gradient `(d_a v_b + d_b v_a)/2`
+/// in the order xx, xy, xz, yy, yz, zz (for [`AvCleaning`](crate::momentum::AvCleaning));
+/// pass `&mut []` for none.
 ///
 /// # Panics
 /// If the arrays differ in length or do not cover the lists.
+#[allow(clippy::too_many_arguments)]
 pub fn velocity_divergence<K: Kernel>(
     kernel: &K,
     bbox: &BoundingBox,
@@ -448,6 +465,7 @@ pub fn velocity_divergence<K: Kernel>(
     nl: &CompactNeighborList,
     div_v: &mut [f64],
     curl_v: &mut [f64],
+    grad_v: &mut [Vec<f64>],
 ) {
     struct Run<'a, K> {
         kernel: &'a K,
@@ -456,6 +474,7 @@ pub fn velocity_divergence<K: Kernel>(
         nl: &'a CompactNeighborList,
         div_v: &'a mut [f64],
         curl_v: &'a mut [f64],
+        grad_v: &'a mut [Vec<f64>],
     }
     impl<K: Kernel> WithGradients for Run<'_, K> {
         type Output = ();
@@ -464,7 +483,8 @@ pub fn velocity_divergence<K: Kernel>(
             let stage = VelocityGradient::<K, IAD>(Flow::new(self.kernel, &self.flow, IAD));
             let r = self.nl.targets();
             let curl = (!self.curl_v.is_empty()).then(|| [&mut self.curl_v[r.clone()]]);
-            driver.run(&stage, ([&mut self.div_v[r]], curl));
+            let sym = sym_out(self.grad_v, r.clone());
+            driver.run(&stage, ([&mut self.div_v[r]], (curl, sym)));
         }
     }
     let run = Run {
@@ -474,8 +494,18 @@ pub fn velocity_divergence<K: Kernel>(
         nl,
         div_v,
         curl_v,
+        grad_v,
     };
     with_gradients(gradients, run);
+}
+
+/// The targets' slices of the six symmetric-gradient fields, when there
+/// are six (none asked for when empty).
+fn sym_out(grad_v: &mut [Vec<f64>], r: std::ops::Range<usize>) -> Option<[&mut [f64]; 6]> {
+    let [a, b, c, d, e, f] = grad_v else {
+        return None;
+    };
+    Some([a, b, c, d, e, f].map(|v| &mut v[r.clone()]))
 }
 
 /// The IAD matrices ([`iad_volumes`](crate::iad::iad_volumes), volumes
@@ -501,6 +531,7 @@ pub fn iad_and_velocity_divergence<K: Kernel>(
     c: &mut [Vec<f64>; 6],
     div_v: &mut [f64],
     curl_v: &mut [f64],
+    grad_v: &mut [Vec<f64>],
 ) -> Result<(), Singular> {
     let driver = Flow::driver(bbox, kernel, &flow, nl);
     let n = flow.pos.x.len();
@@ -518,7 +549,8 @@ pub fn iad_and_velocity_divergence<K: Kernel>(
     let [c0, c1, c2, c3, c4, c5] = c;
     let matrices = [c0, c1, c2, c3, c4, c5].map(|c| &mut c[r.clone()]);
     let curl = (!curl_v.is_empty()).then(|| [&mut curl_v[r.clone()]]);
-    match driver.run(&stage, (matrices, ([&mut div_v[r]], curl))) {
+    let sym = sym_out(grad_v, r.clone());
+    match driver.run(&stage, (matrices, ([&mut div_v[r]], (curl, sym)))) {
         FirstSingular(Some(s)) => Err(s),
         FirstSingular(None) => Ok(()),
     }

@@ -11,8 +11,8 @@ use crate::eos::Eos;
 use crate::iad::iad_volumes;
 use crate::integrate::{integrate, HUpdate};
 use crate::momentum::{
-    momentum_energy_with, Alpha, ArtificialStress, Gradients, HydroState, MomentumScheme,
-    MomentumStats, PairFactors, Rates, VolumeWeights,
+    momentum_energy_with, Alpha, ArtificialStress, AvCleaning, Gradients, HydroState,
+    MomentumScheme, MomentumStats, PairFactors, Rates, VolumeWeights,
 };
 use crate::neighbors::{find_neighbors, NeighborParams};
 use crate::scheme::{Scheme, Viscosity, Volume};
@@ -342,6 +342,8 @@ pub struct Hydro<K: Kernel, C: Communicator = SerialComm> {
     curl_v: Vec<f64>,
     /// Viscosity strengths with the Balsara factor (limiter only).
     alpha_eff: Vec<f64>,
+    /// Symmetric velocity gradient, six fields (AV cleaning only).
+    grad_v: Vec<Vec<f64>>,
     /// Volume elements `X` and their normalisation `k` (generalised
     /// volumes only).
     xm: Vec<f64>,
@@ -406,6 +408,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             div_v: Vec::new(),
             curl_v: Vec::new(),
             alpha_eff: Vec::new(),
+            grad_v: Vec::new(),
             xm: Vec::new(),
             kx: Vec::new(),
             next_h_max: None,
@@ -519,6 +522,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         self.tree = Octree::default();
         self.gravity_tree = Octree::default();
         self.factors = PairFactors::default();
+        self.grad_v = Vec::new();
         for v in [
             &mut self.div_v,
             &mut self.curl_v,
@@ -549,6 +553,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             + (self.div_v.capacity()
                 + self.curl_v.capacity()
                 + self.alpha_eff.capacity()
+                + self.grad_v.iter().map(Vec::capacity).sum::<usize>()
                 + self.xm.capacity()
                 + self.kx.capacity())
                 * 8
@@ -745,6 +750,9 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         step: u64,
         divergence: bool,
     ) -> Result<(), CoreError> {
+        if divergence {
+            self.size_gradient(p.len());
+        }
         let pos = positions!(p);
         let volumes = match self.config.scheme.volume {
             Volume::Mass => [&p.m[..], &p.rho[..]],
@@ -774,6 +782,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 &mut p.iad,
                 &mut self.div_v,
                 &mut self.curl_v,
+                &mut self.grad_v,
             )
         } else {
             iad_volumes(&self.kernel, bbox, pos, volumes, &self.list, &mut p.iad)
@@ -802,6 +811,9 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         let scheme = self.config.scheme;
         let n = p.len();
         let g = scheme.gradients;
+        if !divergence_done {
+            self.size_gradient(n);
+        }
         let (kernel, list) = (&self.kernel, &self.list);
         if !divergence_done {
             self.div_v.resize(n, 0.0);
@@ -817,6 +829,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 list,
                 &mut self.div_v,
                 &mut self.curl_v,
+                &mut self.grad_v,
             );
             clock.lap(Stage::Switches);
         }
@@ -849,11 +862,27 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             }
             clock.lap(Stage::Switches);
             self.domain.exchange(&mut [self.alpha_eff.as_mut_slice()])?;
-        } else {
+        } else if scheme.switches().is_some() {
             self.domain.exchange(&mut [p.alpha.as_mut_slice()])?;
+        }
+        if scheme.av_cleaning {
+            let mut fields: Vec<&mut [f64]> =
+                self.grad_v.iter_mut().map(Vec::as_mut_slice).collect();
+            self.domain.exchange(&mut fields)?;
         }
         clock.lap(Stage::Halos);
         Ok(())
+    }
+
+    /// Sizes the six symmetric-gradient fields to `n` particles when the
+    /// scheme cleans the viscosity (none otherwise).
+    fn size_gradient(&mut self, n: usize) {
+        if self.config.scheme.av_cleaning {
+            self.grad_v.resize_with(6, Vec::new);
+            for v in &mut self.grad_v {
+                v.resize(n, 0.0);
+            }
+        }
     }
 
     /// Accelerations and du/dt of the owned particles, with the scheme's
@@ -880,6 +909,10 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             alpha,
             av_form: s.av_form,
             volumes: VolumeWeights::of(s.volume, &self.xm),
+            cleaning: s.av_cleaning.then(|| AvCleaning {
+                grad_v: std::array::from_fn(|k| self.grad_v[k].as_slice()),
+                eta_crit: AvCleaning::eta_crit(self.config.neighbors.ng0),
+            }),
             stress: s
                 .artificial_stress
                 .map(|e| ArtificialStress::new(e, self.config.neighbors.ng0, &self.kernel)),

@@ -160,6 +160,7 @@ pub fn momentum_energy<K: Kernel>(
         av_form: AvForm::Paper,
         volumes: VolumeWeights::Mass,
         stress: None,
+        cleaning: None,
     };
     momentum_energy_with(kernel, bbox, s, f, scheme, nl, out)
 }
@@ -188,6 +189,7 @@ pub fn momentum_energy_switched<K: Kernel>(
         av_form: AvForm::Paper,
         volumes: VolumeWeights::Mass,
         stress: None,
+        cleaning: None,
     };
     momentum_energy_with(kernel, bbox, s, f, scheme, nl, out)
 }
@@ -249,6 +251,47 @@ pub struct MomentumScheme<'a> {
     pub volumes: VolumeWeights<'a>,
     /// Artificial stress against the tensile instability, or none.
     pub stress: Option<ArtificialStress>,
+    /// Cleaning of the viscosity's velocity jump, or none.
+    pub cleaning: Option<AvCleaning<'a>>,
+}
+
+/// SPH-EXA's "AV cleaning": the viscosity of pair `i, j` sees the
+/// velocity jump left after a linear reconstruction from both sides,
+/// `r . v_ij - phi_ij (r . G_i r + r . G_j r)` instead of `r . v_ij`,
+/// with `G` the symmetric velocity gradient, `r = x_i - x_j` and the
+/// van Leer type limiter
+///
+/// ```text
+/// A = (r . G_i r) / (r . G_j r),   phi_ij = 1/2 damp(eta) clamp(4 A / (1 + A)^2, 0, 1)
+/// ```
+///
+/// (`damp = exp(-(5 (eta - eta_c))^2)` for pairs closer than
+/// `eta = min(r/h_i, r/h_j) < eta_c`, else 1; `eta_c` the lattice spacing
+/// over h for the target neighbour count). A linear velocity field
+/// (shear, uniform compression) gives `A = 1`, `phi = 1/2` and no
+/// viscosity at all; across a shock the two sides' gradients differ and
+/// the limiter restores the full jump. The corrected jump is symmetric in
+/// `i, j`, so momentum and energy stay conserved.
+#[derive(Debug, Clone, Copy)]
+pub struct AvCleaning<'a> {
+    /// `G_xx, G_xy, G_xz, G_yy, G_yz, G_zz` of every particle (targets
+    /// and halos).
+    pub grad_v: [&'a [f64]; 6],
+    /// `eta_c`.
+    pub eta_crit: f64,
+}
+
+impl AvCleaning<'_> {
+    /// The spacing over h of a lattice with `ng0` neighbours within 2 h:
+    /// `(32 pi / (3 (ng0 + 1)))^(1/3)` (SPH-EXA's `eta_crit`).
+    ///
+    /// ```
+    /// let e = sph_core::momentum::AvCleaning::eta_crit(100);
+    /// assert!((e - 0.6923).abs() < 1e-4);
+    /// ```
+    pub fn eta_crit(ng0: usize) -> f64 {
+        (32.0 * std::f64::consts::PI / (3.0 * (ng0 as f64 + 1.0))).cbrt()
+    }
 }
 
 /// Monaghan's (2000) artificial stress for particles under tension: pair
@@ -341,6 +384,7 @@ pub fn momentum_energy_with<K: Kernel>(
         av_form: scheme.av_form,
         volumes: scheme.volumes,
         stress: scheme.stress,
+        cleaning: scheme.cleaning,
         nl,
         out,
     };
@@ -362,6 +406,7 @@ struct MomentumRun<'a, K> {
     av_form: AvForm,
     volumes: VolumeWeights<'a>,
     stress: Option<ArtificialStress>,
+    cleaning: Option<AvCleaning<'a>>,
     nl: &'a CompactNeighborList,
     out: Rates<'a>,
 }
@@ -386,7 +431,7 @@ impl<K: Kernel> WithGradients for MomentumRun<'_, K> {
         let xm = self.volumes.elements().map_or(&[][..], |x| &x[..n]);
         let product = matches!(self.volumes, VolumeWeights::Product(_));
         let sphexa = self.av_form == AvForm::SphExa;
-        let stress = self.stress;
+        let stress = (self.stress, self.cleaning);
         macro_rules! go {
             ($sw:literal, $a:expr, $per:expr) => {
                 match (!xm.is_empty(), sphexa) {
@@ -456,7 +501,7 @@ fn momentum<'a, K, const IAD: bool, const SWITCHED: bool, const VE: bool, const 
     alpha: f64,
     alpha_per: &'a [f64],
     (xm, product): (&'a [f64], bool),
-    stress: Option<ArtificialStress>,
+    (stress, cleaning): (Option<ArtificialStress>, Option<AvCleaning<'a>>),
 ) -> Momentum<'a, K, IAD, SWITCHED, VE, SPHEXA> {
     Momentum {
         flow,
@@ -468,6 +513,7 @@ fn momentum<'a, K, const IAD: bool, const SWITCHED: bool, const VE: bool, const 
         xm,
         product,
         stress,
+        cleaning,
     }
 }
 
@@ -488,6 +534,7 @@ struct Momentum<'a, K, const IAD: bool, const SWITCHED: bool, const VE: bool, co
     /// Atwood blend.
     product: bool,
     stress: Option<ArtificialStress>,
+    cleaning: Option<AvCleaning<'a>>,
 }
 
 /// What the pair stages read of every particle, cut to one length (so
@@ -556,6 +603,8 @@ struct MomentumSums {
     xm_i: F64s,
     /// `1 / m_i` (weights `X_i X_j` only).
     inv_m_i: F64s,
+    /// The targets' symmetric velocity gradients (AV cleaning only).
+    grad_i: [F64s; 6],
     ci_m: [F64s; 6],
     acc_a: [F64s; 3],
     /// `sum_j m_j v_ij . A_ij(h_i)`
@@ -600,6 +649,10 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool, const VE: bool, const SPH
             }),
             rho_i: if VE { g.load(self.flow.rho) } else { zero },
             xm_i: if VE { g.load(self.xm) } else { zero },
+            grad_i: match &self.cleaning {
+                Some(cl) => cl.grad_v.map(|f| g.load(f)),
+                None => [zero; 6],
+            },
             inv_m_i: if VE && self.product {
                 F64s::splat(1.0) / g.load(self.flow.m)
             } else {
@@ -662,7 +715,11 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool, const VE: bool, const SPH
             vi[1] - self.flow.v[1][j],
             vi[2] - self.flow.v[2][j],
         ];
-        let w = (vij[0] * d[0] + vij[1] * d[1] + vij[2] * d[2]) * inv_r;
+        let mut rv = vij[0] * d[0] + vij[1] * d[1] + vij[2] * d[2];
+        if let Some(cl) = &self.cleaning {
+            rv += cleaning_correction(cl, t.grad_i, j, d, rr * inv_hi.min(F64s::splat(inv_hj)));
+        }
+        let w = rv * inv_r;
         let alpha_ij = if SWITCHED {
             0.5 * (t.alpha_i + self.alpha_per[j])
         } else {
@@ -757,6 +814,43 @@ impl Reduce for MomentumStats {
             max_abs_div_v: self.max_abs_div_v.max(b.max_abs_div_v),
         }
     }
+}
+
+/// The AV cleaning's additive correction to `r . v_ij` ([`AvCleaning`])
+/// for partner `j` at separation `d = x_i - x_j`, `eta = min(r/h_i, r/h_j)`.
+#[inline(always)]
+fn cleaning_correction(
+    cl: &AvCleaning<'_>,
+    gi: [F64s; 6],
+    j: usize,
+    d: [F64s; 3],
+    eta: F64s,
+) -> F64s {
+    let zero = F64s::splat(0.0);
+    let gj = cl.grad_v.map(|g| F64s::splat(g[j]));
+    let quad = |g: [F64s; 6]| {
+        let gd = sym_mat_vec(&g, d);
+        gd[0] * d[0] + gd[1] * d[1] + gd[2] * d[2]
+    };
+    let (qi, qj) = (quad(gi), quad(gj));
+    let nonzero = qj.abs().gt(zero);
+    let a = nonzero.select(qi / nonzero.select(qj, F64s::splat(1.0)), zero);
+    let a1 = 1.0 + a;
+    let limiter = (4.0 * a / (a1 * a1)).max(zero).min(F64s::splat(1.0));
+    let mut damp = F64s::splat(1.0);
+    if eta.min_lane() < cl.eta_crit {
+        // Pairs closer than the spacing (rare): damped toward r = 0.
+        let e = eta.to_array();
+        damp = F64s::from_array(std::array::from_fn(|l| {
+            if e[l] < cl.eta_crit {
+                let x = 5.0 * (e[l] - cl.eta_crit);
+                (-x * x).exp()
+            } else {
+                1.0
+            }
+        }));
+    }
+    -(0.5 * damp * limiter) * (qi + qj)
 }
 
 /// SPH-EXA's momentum weights `(a_ij, b_ij)` of pair `i, j` from the

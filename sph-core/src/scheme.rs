@@ -131,6 +131,13 @@ pub struct Scheme {
     /// spacing).
     #[serde(default)]
     pub fixed_h: bool,
+    /// SPH-EXA's AV cleaning: the viscosity sees the velocity jump left
+    /// after a limited linear reconstruction from both sides
+    /// ([`AvCleaning`](crate::momentum::AvCleaning)), so shear and smooth
+    /// compression are not damped; needs the symmetric velocity gradient
+    /// (six fields, exchanged to the halos).
+    #[serde(default)]
+    pub av_cleaning: bool,
 }
 
 impl Default for Scheme {
@@ -140,7 +147,7 @@ impl Default for Scheme {
 }
 
 /// The named schemes: (name, scheme, one line on what it is).
-pub const PRESETS: [(&str, Scheme, &str); 7] = [
+pub const PRESETS: [(&str, Scheme, &str); 8] = [
     (
         "paper",
         Scheme::PAPER,
@@ -160,6 +167,11 @@ pub const PRESETS: [(&str, Scheme, &str); 7] = [
         "ve-ac",
         Scheme::VE_AC,
         "`ve` without grad-h, with artificial conductivity alpha_u = 1: lower Sedov L1 rho, P and |v| than SPH-EXA's `ve` at 30^3, 40^3 and 50^3",
+    ),
+    (
+        "shear",
+        Scheme::SHEAR,
+        "shear layers: the paper's IAD and grad-h, viscosity switches in [0.05, 1], SPH-EXA's AV cleaning (the Kelvin-Helmholtz case's)",
     ),
     (
         "contact",
@@ -191,6 +203,7 @@ impl Scheme {
         conductivity: None,
         artificial_stress: None,
         fixed_h: false,
+        av_cleaning: false,
     };
 
     /// What SPH-EXA's `std` propagator runs: the paper's scheme without
@@ -225,6 +238,7 @@ impl Scheme {
         conductivity: None,
         artificial_stress: None,
         fixed_h: false,
+        av_cleaning: false,
     };
 
     /// [`Scheme::VE`] without the grad-h terms and with the artificial
@@ -236,6 +250,19 @@ impl Scheme {
         grad_h: false,
         conductivity: Some(1.0),
         ..Scheme::VE
+    };
+
+    /// The `kelvin-helmholtz` case's scheme: the paper's (IAD, grad-h)
+    /// with viscosity switches (alpha in [0.05, 1]) and SPH-EXA's AV
+    /// cleaning ([`AvCleaning`](crate::momentum::AvCleaning)), which
+    /// leaves a shear layer's linear velocity profile undamped.
+    /// Kelvin-Helmholtz M(1.5) (reference 0.1479): 0.074 at 32^2 x 8 and
+    /// 0.120 at 64^2 x 8; `ve`: 0.017 and 0.041, `ve` with cleaning 0.065
+    /// and 0.112.
+    pub const SHEAR: Scheme = Scheme {
+        viscosity: Viscosity::Switched(AvSwitchParams::DEFAULT),
+        av_cleaning: true,
+        ..Scheme::PAPER
     };
 
     /// The `isobaric-cube` case's scheme: the paper's with pressure-energy
@@ -267,6 +294,7 @@ impl Scheme {
         conductivity: None,
         artificial_stress: None,
         fixed_h: false,
+        av_cleaning: false,
     };
 
     /// The `evrard` case's scheme: kernel gradients, no grad-h, viscosity
@@ -284,6 +312,7 @@ impl Scheme {
         conductivity: None,
         artificial_stress: None,
         fixed_h: false,
+        av_cleaning: false,
     };
 
     /// The preset called `name` (see [`PRESETS`]).
@@ -380,7 +409,7 @@ impl Scheme {
     /// before the momentum stage: for the viscosity switches or the
     /// Balsara limiter.
     pub fn needs_divergence(&self) -> bool {
-        self.switches().is_some() || self.balsara
+        self.switches().is_some() || self.balsara || self.av_cleaning
     }
 
     /// The optional per-particle fields the scheme needs (`gravity`: the

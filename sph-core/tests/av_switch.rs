@@ -131,8 +131,15 @@ fn flow(p: &Particles) -> FlowState<'_> {
 }
 
 fn divergence(s: &Setup, gradients: Gradients) -> (Vec<f64>, Vec<f64>) {
+    let (div_v, curl_v, _) = gradient(s, gradients);
+    (div_v, curl_v)
+}
+
+/// Divergence, curl and the six symmetric-gradient fields.
+fn gradient(s: &Setup, gradients: Gradients) -> (Vec<f64>, Vec<f64>, [Vec<f64>; 6]) {
     let n = s.p.len();
     let (mut div_v, mut curl_v) = (vec![0.0; n], vec![0.0; n]);
+    let mut sym: [Vec<f64>; 6] = std::array::from_fn(|_| vec![0.0; n]);
     velocity_divergence(
         &kernel(),
         &s.bbox,
@@ -141,8 +148,9 @@ fn divergence(s: &Setup, gradients: Gradients) -> (Vec<f64>, Vec<f64>) {
         &s.list,
         &mut div_v,
         &mut curl_v,
+        &mut sym,
     );
-    (div_v, curl_v)
+    (div_v, curl_v, sym)
 }
 
 proptest! {
@@ -159,17 +167,27 @@ proptest! {
             s.p.vy[i] = rng.uniform() - 0.5;
             s.p.vz[i] = rng.uniform() - 0.5;
         }
-        let (div_v, curl_v) = divergence(&s, Gradients::Iad);
+        let (div_v, curl_v, sym) = gradient(&s, Gradients::Iad);
         let n = s.p.len();
         let mut c: [Vec<f64>; 6] = std::array::from_fn(|_| vec![0.0; n]);
         let (mut div_f, mut curl_f) = (vec![0.0; n], vec![0.0; n]);
+        let mut sym_f: [Vec<f64>; 6] = std::array::from_fn(|_| vec![0.0; n]);
         let p = &s.p;
         let mut plain = flow(p);
         plain.iad = [&[]; 6];
         iad_and_velocity_divergence(
             &kernel(), &s.bbox, plain, [&p.m, &p.rho], &s.list, &mut c, &mut div_f, &mut curl_f,
+            &mut sym_f,
         )
         .unwrap();
+        for k in 0..6 {
+            prop_assert!(sym_f[k].iter().zip(&sym[k]).all(|(a, b)| a.to_bits() == b.to_bits()));
+        }
+        // The trace of the symmetric gradient is the divergence.
+        for i in 0..n {
+            let tr = sym[0][i] + sym[3][i] + sym[5][i];
+            prop_assert!((tr - div_v[i]).abs() <= 1e-12 * (1.0 + div_v[i].abs()));
+        }
         for k in 0..6 {
             prop_assert!(c[k].iter().zip(&p.iad[k]).all(|(a, b)| a.to_bits() == b.to_bits()));
         }

@@ -250,6 +250,7 @@ fn forces_with(s: &mut Setup, alpha: Alpha<'_>, volume: Volume, gradients: Gradi
         av_form: AvForm::SphExa,
         volumes: VolumeWeights::of(volume, &s.xm),
         stress: None,
+        cleaning: None,
     };
     let rates = Rates {
         ax: &mut p.ax,

@@ -1,14 +1,16 @@
 //! Kelvin-Helmholtz instability (McNally et al. 2012 set-up), 32 x 32 x 8
-//! particles, to t = 1.5, with the case's scheme (`ve`): the seeded mode
-//! must grow.
+//! particles, to t = 1.5, with the case's scheme (`shear`: the paper's with
+//! viscosity switches and SPH-EXA's AV cleaning): the seeded mode must grow.
 //!
-//! Measured M(t) at 32^2 (2 threads): 0.0100 at the start, a dip to 0.0055
-//! near t = 0.47 while the seed reorganises, then growth: 0.0138 at t = 1.0,
-//! 0.0219 at t = 1.5. McNally's converged reference is M(1.5) = 0.1479;
-//! SPH of the SPH-EXA family reaches 0.029 with alpha = 1 and 0.083 with
-//! switches (at their resolutions, VALIDATION.md). The checks: M grows
-//! past 1.5x the seed by t = 1.5 and rises over the last third of the run;
-//! the null solution (nothing happens) keeps M = 0.01 and fails both.
+//! Measured M(1.5) (2 threads; seed 0.01, McNally's converged reference
+//! 0.1479): `shear` 0.074 at 32^2 x 8 and 0.120 at 64^2 x 8; `ve` 0.017
+//! and 0.041; `ve` with the cleaning 0.065 and 0.112; the paper's scheme
+//! with switches but no cleaning 0.035 at 32^2. At 32^2 the mode dips to
+//! 0.0073 near t = 0.4 while the seed reorganises, then grows: 0.0246 at
+//! t = 1.0. The checks: M(1.5) above 0.05 (5x the seed; no scheme without
+//! the cleaning reaches it at 32^2, and the null solution keeps the seed's
+//! 0.01), M rising over the last third of the run, energy and momentum
+//! conserved.
 
 use sph_apps::cases;
 use sph_apps::simulation::Stop;
@@ -38,7 +40,7 @@ fn kelvin_helmholtz_mode_grows() {
     let (t_end, m_end) = *m.last().unwrap();
     assert!((t_end - 1.5).abs() < 1e-9, "last line at t = {t_end}");
     assert!((m[0].1 / seed - 1.0).abs() < 0.01, "M starts at {}", m[0].1);
-    assert!(m_end > 1.5 * seed, "M(1.5) = {m_end}");
+    assert!(m_end > 5.0 * seed, "M(1.5) = {m_end}");
     let at_one = m.iter().find(|(t, _)| *t >= 1.0).unwrap().1;
     assert!(m_end > at_one, "M(1.0) = {at_one}, M(1.5) = {m_end}");
     println!("M(1.5) = {m_end}");

@@ -283,7 +283,8 @@ struct RunArgs {
     /// (the seed paper's eqs. 1-5: IAD, grad-h, constant alpha = 1), `std`
     /// (SPH-EXA's std: as paper without grad-h), `ve` (SPH-EXA's default:
     /// volume elements, grad-h, IAD, its switches), `ve-ac` (ve without
-    /// grad-h, with conductivity 1), `contact` (pressure-energy volumes,
+    /// grad-h, with conductivity 1), `shear` (the paper's with switches and
+    /// AV cleaning), `contact` (pressure-energy volumes,
     /// kernel gradients, grad-h, alpha = 1), `noh` (kernel gradients, grad-h,
     /// switches up to alpha 0.7), `evrard` (kernel gradients, no grad-h,
     /// switches up to alpha 0.5); `sphexa cases` lists them. The options
@@ -336,6 +337,13 @@ struct RunArgs {
     /// Particle volumes (default: the case's, see `sphexa cases`).
     #[arg(long, value_enum)]
     volume: Option<VolumeArg>,
+    /// SPH-EXA's AV cleaning: the viscosity acts on the velocity jump left
+    /// after a limited linear reconstruction from both sides of a pair, so
+    /// shear layers and smooth flows keep their kinetic energy while shocks
+    /// keep their full viscosity. Default: the case's (kelvin-helmholtz:
+    /// see `sphexa cases`).
+    #[arg(long, value_enum)]
+    av_cleaning: Option<Switch>,
     /// Self-gravity: opening angle theta of the tree, a positive number
     /// (cases with gravity only).
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true,
@@ -950,6 +958,9 @@ fn scheme_options(s: &Scheme, softening: Option<f64>) -> String {
     if s.volume != Volume::Mass {
         text += &format!(" --volume {}", volume_name(s.volume));
     }
+    if s.av_cleaning {
+        text += " --av-cleaning on";
+    }
     if let Some(soft) = softening {
         text += &format!(" --softening {soft} (self-gravity)");
     }
@@ -1025,6 +1036,7 @@ fn scheme_overrides(a: &RunArgs) -> Result<SchemeOverrides, AppError> {
             VolumeArg::Ve => Volume::Generalised,
             VolumeArg::PressureEnergy => Volume::PressureEnergy,
         }),
+        av_cleaning: a.av_cleaning.map(|s| s == Switch::On),
         softening: a.softening,
     })
 }
@@ -1289,6 +1301,7 @@ fn resolved_config(
         Value::String(if s.fixed_h { "fixed" } else { "adaptive" }.into()),
     );
     set("volume", Value::String(volume_name(s.volume).into()));
+    set("av-cleaning", on(s.av_cleaning));
     set("theta", Value::Float(a.theta));
     if let Some(g) = config.gravity {
         set("softening", Value::Float(g.softening));

@@ -51,6 +51,8 @@ pub struct SchemeOverrides {
     pub fixed_h: Option<bool>,
     /// Particle volumes.
     pub volume: Option<Volume>,
+    /// SPH-EXA's AV cleaning.
+    pub av_cleaning: Option<bool>,
     /// Self-gravity softening scale (cases with self-gravity).
     pub softening: Option<f64>,
 }
@@ -82,6 +84,9 @@ impl SchemeOverrides {
         }
         if let Some(v) = self.volume {
             s.volume = v;
+        }
+        if let Some(c) = self.av_cleaning {
+            s.av_cleaning = c;
         }
         s
     }
