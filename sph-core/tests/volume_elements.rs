@@ -4,6 +4,8 @@
 //! pressure work of linear fields, against the exact `-grad P / rho` and
 //! `-(P / rho) div v`.
 
+mod common;
+
 use proptest::prelude::*;
 use sph_core::density::{density, pressure_energy_density, ve_density, xmass, Positions, VeOut};
 use sph_core::iad::iad_volumes;
@@ -348,24 +350,11 @@ proptest! {
         }
         refresh(&mut s);
         forces(&mut s, Alpha::PerParticle(&alpha));
-        let p = &s.p;
-        let mut mom = [0.0; 3];
-        let (mut scale, mut de, mut de_scale) = (0.0, 0.0, 0.0);
-        for i in 0..p.len() {
-            let a = [p.ax[i], p.ay[i], p.az[i]];
-            for k in 0..3 {
-                mom[k] += p.m[i] * a[k];
-                scale += p.m[i] * a[k].abs();
-            }
-            let work = p.m[i] * (p.vx[i] * a[0] + p.vy[i] * a[1] + p.vz[i] * a[2]);
-            de += work + p.m[i] * p.du[i];
-            de_scale += work.abs() + (p.m[i] * p.du[i]).abs();
-        }
-        for k in 0..3 {
-            prop_assert!(mom[k].abs() < 1e-13 * scale, "momentum {:e} vs {:e}", mom[k], scale);
-        }
-        prop_assert!(de.abs() < 1e-12 * de_scale, "energy rate {:e} vs {:e}", de, de_scale);
+        let (momentum, energy) = common::conservation_errors(&s.p);
+        prop_assert!(momentum < 1e-13, "momentum {momentum:e}");
+        prop_assert!(energy < 1e-12, "energy rate {energy:e}");
         // Some pairs lie on the Atwood ramp.
+        let p = &s.p;
         let on_ramp = s.list.targets().any(|i| {
             s.list.neighbors(i).any(|j| {
                 let at = (p.rho[i] - p.rho[j]).abs() / (p.rho[i] + p.rho[j]);
@@ -461,22 +450,8 @@ proptest! {
         refresh_with(&mut s, Volume::PressureEnergy);
         let g = if iad { Gradients::Iad } else { Gradients::Kernel };
         forces_with(&mut s, Alpha::Constant(1.0), Volume::PressureEnergy, g);
-        let p = &s.p;
-        let mut mom = [0.0; 3];
-        let (mut scale, mut de, mut de_scale) = (0.0, 0.0, 0.0);
-        for i in 0..p.len() {
-            let a = [p.ax[i], p.ay[i], p.az[i]];
-            for k in 0..3 {
-                mom[k] += p.m[i] * a[k];
-                scale += p.m[i] * a[k].abs();
-            }
-            let work = p.m[i] * (p.vx[i] * a[0] + p.vy[i] * a[1] + p.vz[i] * a[2]);
-            de += work + p.m[i] * p.du[i];
-            de_scale += work.abs() + (p.m[i] * p.du[i]).abs();
-        }
-        for k in 0..3 {
-            prop_assert!(mom[k].abs() < 1e-13 * scale, "momentum {:e} vs {:e}", mom[k], scale);
-        }
-        prop_assert!(de.abs() < 1e-12 * de_scale, "energy rate {:e} vs {:e}", de, de_scale);
+        let (momentum, energy) = common::conservation_errors(&s.p);
+        prop_assert!(momentum < 1e-13, "momentum {momentum:e}");
+        prop_assert!(energy < 1e-12, "energy rate {energy:e}");
     }
 }

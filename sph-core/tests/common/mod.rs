@@ -1,0 +1,24 @@
+//! Checks shared by the stage tests.
+
+use sph_core::Particles;
+
+/// How far one force evaluation is from conserving momentum and energy:
+/// the largest `|sum_i m_i a_i|` over the axes relative to
+/// `sum_i m_i |a_i|`, and `|sum_i m_i (v_i . a_i + du_i)|` relative to the
+/// sum of the magnitudes of its terms (pressure + viscous work against the
+/// kinetic energy change).
+pub fn conservation_errors(p: &Particles) -> (f64, f64) {
+    let (mut mom, mut scale, mut de, mut de_scale) = ([0.0f64; 3], 0.0, 0.0, 0.0);
+    for i in 0..p.len() {
+        let a = [p.ax[i], p.ay[i], p.az[i]];
+        for k in 0..3 {
+            mom[k] += p.m[i] * a[k];
+            scale += p.m[i] * a[k].abs();
+        }
+        let work = p.m[i] * (p.vx[i] * a[0] + p.vy[i] * a[1] + p.vz[i] * a[2]);
+        de += work + p.m[i] * p.du[i];
+        de_scale += work.abs() + (p.m[i] * p.du[i]).abs();
+    }
+    let momentum = mom.iter().fold(0.0f64, |m, c| m.max(c.abs())) / scale;
+    (momentum, de.abs() / de_scale)
+}
