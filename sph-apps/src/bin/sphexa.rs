@@ -264,7 +264,8 @@ struct RunArgs {
     /// `wendland-c4`, `wendland-c6`.
     #[arg(long, default_value = "sinc:6", value_parser = parse_kernel)]
     kernel: KernelChoice,
-    /// Cubic lattices even where the case starts from glass (sod). Glass
+    /// Cubic lattices even where the case starts from glass (sod,
+    /// wind-shock). Glass
     /// blocks are relaxed with the run's kernel and neighbour counts on
     /// first use and cached in $SPHEXA_GLASS_DIR, else
     /// $XDG_CACHE_HOME/sphexa/glass, else ~/.cache/sphexa/glass (see

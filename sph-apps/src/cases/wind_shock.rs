@@ -8,10 +8,15 @@
 //! nominal cloud mass, in `curve.csv` every step. The test of the case
 //! is robustness (no NaN, no negative u) to 2 tau_KH.
 //!
-//! Both gases are cubic lattices of equal-mass particles, the cloud's
-//! spacing 10^(-1/3) of the wind's.
+//! Both gases are equal-mass particles, the cloud's spacing 10^(-1/3) of
+//! the wind's, cut from one periodic glass block ([`crate::glass`],
+//! `side/4` particles per side, relaxed with the run's kernel and
+//! neighbour counts: at the wind's spacing it spans the box's width once,
+//! so the wind has no seam across the periodic faces) or, with
+//! [`Layout::Lattice`], from cubic lattices.
 
 use super::{Layout, field_set, initial_h, Case, Curve, InitialState, Listing, Scheme, Share};
+use crate::glass::{self, GlassSpec};
 use crate::AppError;
 use sph_core::{HydroConfig, Particles};
 use sph_tree::{Boundary, BoundingBox};
@@ -55,8 +60,8 @@ fn survival_fraction(sums: &[f64]) -> Vec<f64> {
 
 impl Case for WindShock {
     /// `side` wind particles per unit length (the box is `side x side/4 x
-    /// side/4`; `side` a multiple of 4): 64 gives 16,384 wind and 176
-    /// cloud particles.
+    /// side/4`; `side` a multiple of 4): 64 gives 16,539 particles from
+    /// glass, 16,536 from lattices.
     fn listing(&self) -> Listing {
         Listing {
             name: "wind-shock",
@@ -76,7 +81,7 @@ impl Case for WindShock {
         side: usize,
         config: &HydroConfig,
         share: Share,
-        _layout: &Layout,
+        layout: &Layout,
     ) -> Result<InitialState, AppError> {
         if !side.is_multiple_of(4) {
             return Err(AppError::Usage(format!(
@@ -107,15 +112,33 @@ impl Case for WindShock {
                 std::array::from_fn::<f64, 3, _>(|k| lo[k] + (c[k] as f64 + 0.5) * spacing)
             })
         };
-        let wind_counts = [side, side / 4, side / 4];
-        let mut pts: Vec<([f64; 3], bool)> = lattice(d, [0.0; 3], wind_counts)
+        let k = (2.0 * RADIUS / dc).ceil() as usize + 1;
+        let lo = CENTRE.map(|c| c - 0.5 * k as f64 * dc);
+        let (wind, cloud): (Vec<[f64; 3]>, Vec<[f64; 3]>) = match layout {
+            Layout::Lattice => (
+                lattice(d, [0.0; 3], [side, side / 4, side / 4]).collect(),
+                lattice(dc, lo, [k; 3]).collect(),
+            ),
+            Layout::Glass { kernel, dir } => {
+                let spec = GlassSpec {
+                    side: side / 4,
+                    kernel: *kernel,
+                    ng0: config.neighbors.ng0,
+                    ngmax: config.neighbors.ngmax,
+                };
+                let g = glass::cached(&spec, dir)?;
+                let hi = lo.map(|c| c + k as f64 * dc);
+                (g.fill([0.0; 3], BOX, d), g.fill(lo, hi, dc))
+            }
+        };
+        let mut pts: Vec<([f64; 3], bool)> = wind
+            .into_iter()
             .filter(|&q| dist(q) >= RADIUS)
             .map(|q| (q, false))
             .collect();
-        let k = (2.0 * RADIUS / dc).ceil() as usize + 1;
-        let lo = CENTRE.map(|c| c - 0.5 * k as f64 * dc);
         pts.extend(
-            lattice(dc, lo, [k; 3])
+            cloud
+                .into_iter()
                 .filter(|&q| dist(q) < RADIUS)
                 .map(|q| (q, true)),
         );
