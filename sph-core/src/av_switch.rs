@@ -91,7 +91,7 @@
 //!     iad: std::array::from_fn(|k| p.iad[k].as_slice()),
 //! };
 //! let mut div_v = vec![0.0; p.len()];
-//! velocity_divergence(&kernel, &bbox, flow, Gradients::Iad, &nl, &mut div_v, &mut []);
+//! velocity_divergence(&kernel, &bbox, flow, Gradients::Iad, &nl, &mut div_v, &mut [], &mut []);
 //! // (several ranks: exchange div_v of the halo particles here)
 //! let params = AvSwitchParams::default();
 //! let mut alpha = vec![params.alpha_min; p.len()];
