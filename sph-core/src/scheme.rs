@@ -186,7 +186,7 @@ pub const PRESETS: [(&str, Scheme, &str); 8] = [
     (
         "evrard",
         Scheme::EVRARD,
-        "self-gravitating collapse: kernel gradients, no grad-h, viscosity switches up to alpha 0.5",
+        "self-gravitating collapse: kernel gradients, no grad-h, viscosity switches up to alpha 0.5, conductivity alpha_u = 1",
     ),
 ];
 
@@ -298,7 +298,7 @@ impl Scheme {
     };
 
     /// The `evrard` case's scheme: kernel gradients, no grad-h, viscosity
-    /// switches up to `alpha = 0.5`.
+    /// switches up to `alpha = 0.5`, artificial conductivity `alpha_u = 1`.
     pub const EVRARD: Scheme = Scheme {
         gradients: Gradients::Kernel,
         grad_h: false,
@@ -309,7 +309,7 @@ impl Scheme {
         }),
         av_form: AvForm::Paper,
         balsara: false,
-        conductivity: None,
+        conductivity: Some(1.0),
         artificial_stress: None,
         fixed_h: false,
         av_cleaning: false,

@@ -5,7 +5,7 @@ use clap::parser::ValueSource;
 use clap::{
     ArgAction, ArgMatches, Args, CommandFactory, FromArgMatches, Parser, Subcommand, ValueEnum,
 };
-use sph_apps::cases::{self, Scheme, SchemeOverrides};
+use sph_apps::cases::{self, Physics, Scheme, SchemeOverrides};
 use sph_apps::checkpoint;
 use sph_apps::output::snapshot::{self as snapfile, Schedule};
 use sph_apps::simulation::{CheckpointEvery, Outputs, Progress, Stop};
@@ -288,7 +288,7 @@ struct RunArgs {
     /// AV cleaning), `contact` (pressure-energy volumes,
     /// kernel gradients, grad-h, alpha = 1), `noh` (kernel gradients, grad-h,
     /// switches up to alpha 0.7), `evrard` (kernel gradients, no grad-h,
-    /// switches up to alpha 0.5); `sphexa cases` lists them. The options
+    /// switches up to alpha 0.5, conductivity 1); `sphexa cases` lists them. The options
     /// below override it one by one.
     #[arg(long, value_name = "NAME")]
     scheme: Option<String>,
@@ -302,10 +302,10 @@ struct RunArgs {
     /// number >= 0 (default: the case's, see `sphexa cases`).
     #[arg(long, allow_negative_numbers = true, value_parser = parse_non_negative)]
     alpha: Option<f64>,
-    /// Courant factor, in (0, 1].
-    #[arg(long, default_value_t = 0.2, allow_negative_numbers = true,
-          value_parser = parse_courant)]
-    courant: f64,
+    /// Courant factor, in (0, 1] (default: the case's, see `sphexa cases`:
+    /// 0.2, evrard 0.4).
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_courant)]
+    courant: Option<f64>,
     /// The grad-h correction Omega (default: the case's, see `sphexa cases`).
     #[arg(long, value_enum)]
     grad_h: Option<Switch>,
@@ -923,19 +923,19 @@ fn list_cases() {
         say!(
             "{:<14} scheme: {}",
             "",
-            scheme_options(&c.default_scheme(), c.physics().softening)
+            scheme_options(&c.default_scheme(), c.physics())
         );
     }
     say!("\nscheme presets (sphexa run CASE --scheme NAME):");
     for (name, scheme, what) in PRESETS {
         say!("{name:<14} {what}");
-        say!("{:<14} {}", "", scheme_options(&scheme, None));
+        say!("{:<14} {}", "", scheme_options(&scheme, Physics::IDEAL_GAS));
     }
 }
 
-/// A scheme (and the case's softening) written as the `sphexa run`
-/// options that select it.
-fn scheme_options(s: &Scheme, softening: Option<f64>) -> String {
+/// A scheme (and the case's softening and Courant factor) written as the
+/// `sphexa run` options that select it.
+fn scheme_options(s: &Scheme, physics: Physics) -> String {
     let on = |b: bool| if b { "on" } else { "off" };
     let gradients = match s.gradients {
         Gradients::Iad => "iad",
@@ -962,8 +962,11 @@ fn scheme_options(s: &Scheme, softening: Option<f64>) -> String {
     if s.av_cleaning {
         text += " --av-cleaning on";
     }
-    if let Some(soft) = softening {
+    if let Some(soft) = physics.softening {
         text += &format!(" --softening {soft} (self-gravity)");
+    }
+    if let Some(k) = physics.courant {
+        text += &format!(" --courant {k}");
     }
     text
 }
@@ -1039,6 +1042,7 @@ fn scheme_overrides(a: &RunArgs) -> Result<SchemeOverrides, AppError> {
         }),
         av_cleaning: a.av_cleaning.map(|s| s == Switch::On),
         softening: a.softening,
+        courant: a.courant,
     })
 }
 
@@ -1289,7 +1293,7 @@ fn resolved_config(
         }),
     );
     set("alpha", Value::Float(s.alpha()));
-    set("courant", Value::Float(a.courant));
+    set("courant", Value::Float(config.timestep.k_courant));
     set("grad-h", on(s.grad_h));
     set("av-switches", on(s.switches().is_some()));
     set("conductivity", Value::Float(s.conductivity.unwrap_or(0.0)));
@@ -1568,7 +1572,6 @@ fn run(a: RunArgs) -> Result<(), AppError> {
     };
     config.neighbors.ng0 = a.ng0;
     config.neighbors.ngmax = a.ngmax;
-    config.timestep.k_courant = a.courant;
     let stop = match (a.steps, a.end_time) {
         (Some(s), _) => Stop::Steps(s),
         (None, Some(t)) => Stop::Time(t),

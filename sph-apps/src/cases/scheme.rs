@@ -6,8 +6,9 @@ pub use sph_core::Scheme;
 use sph_core::{Eos, Gradients, HydroConfig, Volume};
 use sph_gravity::GravityParams;
 
-/// The physics of a case besides its scheme: the equation of state and
-/// self-gravity.
+/// The physics of a case besides its scheme: the equation of state,
+/// self-gravity and, where its flow allows a longer step than the default,
+/// the Courant factor.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Physics {
     /// Equation of state.
@@ -15,20 +16,25 @@ pub struct Physics {
     /// Self-gravity with pairs softened within
     /// `softening * (h_i + h_j)`, or none.
     pub softening: Option<f64>,
+    /// The case's Courant factor, or `None` to keep the run's
+    /// (`TimestepParams::k_courant`, default 0.2).
+    pub courant: Option<f64>,
 }
 
 impl Physics {
-    /// An ideal gas with gamma = 5/3, no self-gravity.
+    /// An ideal gas with gamma = 5/3, no self-gravity, the run's Courant
+    /// factor.
     pub const IDEAL_GAS: Physics = Physics {
         eos: Eos::IdealGas { gamma: 5.0 / 3.0 },
         softening: None,
+        courant: None,
     };
 }
 
 /// What a run changes in a case's scheme (the command line's `--scheme`,
 /// `--gradients`, `--grad-h`, `--alpha`, `--av-switches`,
 /// `--conductivity`, `--artificial-stress`, `--smoothing-length`,
-/// `--softening`); `None` keeps the case's choice. The
+/// `--softening`, `--courant`); `None` keeps the case's choice. The
 /// default overrides nothing.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct SchemeOverrides {
@@ -55,6 +61,8 @@ pub struct SchemeOverrides {
     pub av_cleaning: Option<bool>,
     /// Self-gravity softening scale (cases with self-gravity).
     pub softening: Option<f64>,
+    /// Courant factor (over the case's, see [`Physics::courant`]).
+    pub courant: Option<f64>,
 }
 
 impl SchemeOverrides {
@@ -103,6 +111,9 @@ impl SchemeOverrides {
             softening: self.softening.unwrap_or(s),
             ..config.gravity.unwrap_or_default()
         });
+        if let Some(k) = self.courant.or(physics.courant) {
+            config.timestep.k_courant = k;
+        }
     }
 }
 
@@ -141,6 +152,26 @@ mod tests {
         // And switched on from nothing, with the defaults.
         none.apply(Scheme::PAPER, gravity, &mut config);
         assert_eq!(config.gravity.expect("gravity on").theta, 0.5);
+    }
+
+    #[test]
+    fn the_cases_courant_factor_applies_unless_overridden() {
+        let mut config = HydroConfig::default();
+        let fast = Physics {
+            courant: Some(0.4),
+            ..Physics::IDEAL_GAS
+        };
+        SchemeOverrides::default().apply(Scheme::PAPER, fast, &mut config);
+        assert_eq!(config.timestep.k_courant, 0.4);
+        let o = SchemeOverrides {
+            courant: Some(0.25),
+            ..Default::default()
+        };
+        o.apply(Scheme::PAPER, fast, &mut config);
+        assert_eq!(config.timestep.k_courant, 0.25);
+        // A case without its own keeps the run's.
+        SchemeOverrides::default().apply(Scheme::PAPER, Physics::IDEAL_GAS, &mut config);
+        assert_eq!(config.timestep.k_courant, 0.25);
     }
 
     #[test]

@@ -127,7 +127,7 @@ impl Case for SquarePatch {
     fn physics(&self) -> Physics {
         Physics {
             eos: Eos::TaitReferenced { c0: C0 },
-            softening: None,
+            ..Physics::IDEAL_GAS
         }
     }
 
