@@ -436,6 +436,32 @@ impl Particles {
 /// Fields of the integrator's history (see `Particles::history`).
 const HISTORY_FIELDS: usize = 4;
 
+/// One field of [`ParticleFields::place_halos`]: the halos (from
+/// `n_owned` on) gathered in `order` into `scratch`, the owned block
+/// shifted by `n_low`, the halos written around it.
+fn place_tail<T: Copy>(
+    v: &mut [T],
+    n_owned: usize,
+    order: &[u32],
+    n_low: usize,
+    scratch: &mut Vec<u64>,
+    bits: fn(T) -> u64,
+    value: fn(u64) -> T,
+) {
+    scratch.clear();
+    scratch.extend(order.iter().map(|&k| bits(v[n_owned + k as usize])));
+    if n_low > 0 {
+        v.copy_within(0..n_owned, n_low);
+    }
+    let (low, high) = scratch.split_at(n_low);
+    for (d, &s) in v[..n_low].iter_mut().zip(low) {
+        *d = value(s);
+    }
+    for (d, &s) in v[n_low + n_owned..].iter_mut().zip(high) {
+        *d = value(s);
+    }
+}
+
 impl ParticleFields for Particles {
     fn len(&self) -> usize {
         self.x.len()
@@ -494,5 +520,24 @@ impl ParticleFields for Particles {
 
     fn reorder(&mut self, perm: &[u32], scratch: &mut Vec<u64>) {
         Particles::reorder(self, perm, scratch);
+    }
+
+    fn place_halos(&mut self, n_owned: usize, order: &[u32], n_low: usize, scratch: &mut Vec<u64>) {
+        let n = self.len();
+        assert_eq!(order.len() + n_owned, n, "halo order length");
+        for f in self.f64_fields_mut() {
+            place_tail(
+                f,
+                n_owned,
+                order,
+                n_low,
+                scratch,
+                f64::to_bits,
+                f64::from_bits,
+            );
+        }
+        place_tail(&mut self.id, n_owned, order, n_low, scratch, |v| v, |v| v);
+        // nc is recomputed by the next search.
+        self.nc.resize(n, 0);
     }
 }

@@ -80,3 +80,42 @@ proptest! {
         }
     }
 }
+
+proptest! {
+    /// Placing the halos (moving only them and shifting the owned block)
+    /// gives every field exactly what the full reorder by the same
+    /// permutation gives.
+    #[test]
+    fn placing_halos_is_the_reorder_it_stands_for(
+        n_owned in 0usize..60,
+        keys in proptest::collection::vec(any::<u32>(), 0..40),
+        low in 0.0f64..=1.0,
+        gravity in any::<bool>(),
+    ) {
+        let nh = keys.len();
+        let n = n_owned + nh;
+        let fields = FieldSet { grad_h: true, iad: true, gravity, ..FieldSet::default() };
+        let mut p = Particles::new(n, fields);
+        for i in 0..n {
+            p.id[i] = 1000 + i as u64;
+            p.x[i] = i as f64;
+            p.u[i] = -(i as f64);
+            p.iad[2][i] = 0.5 * i as f64;
+            p.du_prev[i] = i as f64 + 0.25;
+        }
+        let mut order: Vec<u32> = (0..nh as u32).collect();
+        order.sort_by_key(|&k| (keys[k as usize], k));
+        let n_low = (low * nh as f64) as usize;
+        let mut perm = Vec::new();
+        sph_domain::halo_placement(n_owned, &order, n_low, &mut perm);
+        let mut want = p.clone();
+        want.reorder(&perm, &mut Vec::new());
+        ParticleFields::place_halos(&mut p, n_owned, &order, n_low, &mut Vec::new());
+        prop_assert_eq!(&p.id, &want.id);
+        prop_assert_eq!(&p.x, &want.x);
+        prop_assert_eq!(&p.u, &want.u);
+        prop_assert_eq!(&p.iad[2], &want.iad[2]);
+        prop_assert_eq!(&p.du_prev, &want.du_prev);
+        prop_assert_eq!(p.nc.len(), n);
+    }
+}

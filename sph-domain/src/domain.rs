@@ -5,7 +5,7 @@
 
 use crate::global_tree::{Assignment, GlobalTree};
 use crate::halo::candidate_cells;
-use crate::{DomainError, ParticleFields};
+use crate::{halo_placement, DomainError, ParticleFields};
 use rayon::prelude::*;
 use sph_comm::{Communicator, ReduceOp};
 use sph_tree::{compute_keys, Boundary, BoundingBox, Curve, KeySorter};
@@ -500,18 +500,16 @@ impl<C: Communicator> Domain<C> {
         let mut order: Vec<u32> = (0..(n - n_owned) as u32).collect();
         order.sort_unstable_by_key(|&a| (halo_keys[a as usize], ids[a as usize]));
         let n_low = order.partition_point(|&a| halo_keys[a as usize] < klo);
-        self.perm.clear();
-        self.perm
-            .extend(order[..n_low].iter().map(|&a| a + n_owned as u32));
-        self.perm.extend(0..n_owned as u32);
-        self.perm
-            .extend(order[n_low..].iter().map(|&a| a + n_owned as u32));
+        halo_placement(n_owned, &order, n_low, &mut self.perm);
         let mut keys = Vec::with_capacity(n);
         keys.extend(order[..n_low].iter().map(|&a| halo_keys[a as usize]));
         keys.extend_from_slice(&self.keys[..n_owned]);
         keys.extend(order[n_low..].iter().map(|&a| halo_keys[a as usize]));
         self.keys = keys;
-        p.reorder(&self.perm, &mut self.scratch);
+        // Only the halos move and the owned block shifts by n_low: a
+        // full reorder of every field took 10 ms of rank 0's 47 ms sync
+        // (Sedov 80^3, 2 ranks).
+        p.place_halos(n_owned, &order, n_low, &mut self.scratch);
         // Inverse permutation: new index of each old index.
         self.scratch_keys.clear();
         self.scratch_keys.resize(n, 0);

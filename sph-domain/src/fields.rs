@@ -56,4 +56,34 @@ pub trait ParticleFields {
     fn keep(&mut self, range: Range<usize>);
     /// Reorders every field: `new[i] = old[perm[i]]`.
     fn reorder(&mut self, perm: &[u32], scratch: &mut Vec<u64>);
+    /// Puts the particles from `n_owned` on (the halos just received)
+    /// around the owned ones: `order[k]` is the offset from `n_owned` of the
+    /// halo that goes k-th; the first `n_low` go before the owned
+    /// particles, the rest after them. The result is that of
+    /// [`reorder`](Self::reorder) with the permutation
+    /// [`halo_placement`] builds, which the default runs; a container can
+    /// instead move only the halos and shift the owned block.
+    fn place_halos(&mut self, n_owned: usize, order: &[u32], n_low: usize, scratch: &mut Vec<u64>) {
+        let mut perm = Vec::new();
+        halo_placement(n_owned, order, n_low, &mut perm);
+        self.reorder(&perm, scratch);
+    }
+}
+
+/// The permutation (`new[i] = old[perm[i]]`) of
+/// [`ParticleFields::place_halos`]: the first `n_low` halos of `order`,
+/// the `n_owned` owned particles in place, the other halos.
+///
+/// ```
+/// let mut perm = Vec::new();
+/// // Two owned particles, three halos: the third and first go in front.
+/// sph_domain::halo_placement(2, &[2, 0, 1], 2, &mut perm);
+/// assert_eq!(perm, [4, 2, 0, 1, 3]);
+/// ```
+pub fn halo_placement(n_owned: usize, order: &[u32], n_low: usize, perm: &mut Vec<u32>) {
+    let halo = |&k: &u32| k + n_owned as u32;
+    perm.clear();
+    perm.extend(order[..n_low].iter().map(halo));
+    perm.extend(0..n_owned as u32);
+    perm.extend(order[n_low..].iter().map(halo));
 }
