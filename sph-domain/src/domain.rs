@@ -386,7 +386,7 @@ impl<C: Communicator> Domain<C> {
         let [x, y, z] = p.positions();
         compute_keys(bbox, self.config.curve, x, y, z, &mut self.keys);
         KeySorter::new().sort(&self.keys, Some(p.ids()), &mut self.perm);
-        p.reorder(&self.perm, &mut self.scratch);
+        p.reorder_carried(&self.perm, &mut self.scratch);
         sph_tree::apply_permutation(&self.perm, &mut self.keys, &mut self.scratch_keys);
     }
 

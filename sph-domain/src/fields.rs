@@ -56,6 +56,13 @@ pub trait ParticleFields {
     fn keep(&mut self, range: Range<usize>);
     /// Reorders every field: `new[i] = old[perm[i]]`.
     fn reorder(&mut self, perm: &[u32], scratch: &mut Vec<u64>);
+    /// Reorders what a sync must keep: the fields that carry state between
+    /// steps (what [`pack`](Self::pack) moves) and the ids; a container may
+    /// reset the fields it recomputes every step before reading them
+    /// instead of moving them. Default: [`reorder`](Self::reorder).
+    fn reorder_carried(&mut self, perm: &[u32], scratch: &mut Vec<u64>) {
+        self.reorder(perm, scratch);
+    }
     /// Puts the particles from `n_owned` on (the halos just received)
     /// around the owned ones: `order[k]` is the offset from `n_owned` of the
     /// halo that goes k-th; the first `n_low` go before the owned
