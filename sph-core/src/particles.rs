@@ -160,36 +160,38 @@ impl Particles {
     }
 
     fn f64_fields_mut(&mut self) -> Vec<&mut Vec<f64>> {
-        let (mut carried, recomputed) = self.fields_by_kind_mut();
-        carried.extend(recomputed.into_iter().map(|(f, _)| f));
-        carried
+        let FieldsByKind {
+            mut halo,
+            history,
+            recomputed,
+        } = self.fields_by_kind_mut();
+        halo.extend(history);
+        halo.extend(recomputed.into_iter().map(|(f, _)| f));
+        halo
     }
 
-    /// The held f64 fields in two kinds: those that carry state from one
-    /// step to the next, and those every step recomputes before reading
-    /// them, each with the value an arriving particle gets (Omega: 1, else
-    /// 0).
-    #[allow(clippy::type_complexity)]
-    fn fields_by_kind_mut(&mut self) -> (Vec<&mut Vec<f64>>, Vec<(&mut Vec<f64>, f64)>) {
-        let mut carried: Vec<&mut Vec<f64>> = vec![
+    /// The held f64 fields by kind: what a halo carries (in its packing
+    /// order, see [`carried`](Self::carried)), the integrator's history
+    /// (carried by migrating particles only), and the fields every step
+    /// recomputes before reading them, each with the value an arriving
+    /// particle gets (Omega: 1, else 0).
+    fn fields_by_kind_mut(&mut self) -> FieldsByKind<'_> {
+        let mut halo: Vec<&mut Vec<f64>> = vec![
             &mut self.x,
             &mut self.y,
             &mut self.z,
             &mut self.vx,
             &mut self.vy,
             &mut self.vz,
-            &mut self.dx,
-            &mut self.dy,
-            &mut self.dz,
             &mut self.h,
             &mut self.m,
             &mut self.u,
-            &mut self.du_prev,
         ];
-        if !self.alpha.is_empty() {
-            carried.push(&mut self.alpha);
+        halo.extend(self.eos_ref.iter_mut().filter(|c| !c.is_empty()));
+        if self.alpha_on {
+            halo.push(&mut self.alpha);
         }
-        carried.extend(self.eos_ref.iter_mut().filter(|c| !c.is_empty()));
+        let history = vec![&mut self.dx, &mut self.dy, &mut self.dz, &mut self.du_prev];
         let mut recomputed: Vec<(&mut Vec<f64>, f64)> = [
             &mut self.rho,
             &mut self.p,
@@ -202,26 +204,20 @@ impl Particles {
         .into_iter()
         .map(|f| (f, 0.0))
         .collect();
-        if !self.omega.is_empty() {
+        if self.fields.grad_h {
             recomputed.push((&mut self.omega, 1.0));
         }
-        if !self.phi.is_empty() {
+        if self.fields.gravity {
             recomputed.push((&mut self.phi, 0.0));
         }
-        recomputed.extend(
-            self.iad
-                .iter_mut()
-                .filter(|c| !c.is_empty())
-                .map(|c| (c, 0.0)),
-        );
-        (carried, recomputed)
-    }
-
-    /// The integrator's history (`dx`, `dy`, `dz`, `du_prev`): persistent
-    /// for owned particles, never read for halos, so halos travel without
-    /// it ([`HISTORY_FIELDS`] words fewer).
-    fn history(&self) -> [&Vec<f64>; HISTORY_FIELDS] {
-        [&self.dx, &self.dy, &self.dz, &self.du_prev]
+        if self.fields.iad {
+            recomputed.extend(self.iad.iter_mut().map(|c| (c, 0.0)));
+        }
+        FieldsByKind {
+            halo,
+            history,
+            recomputed,
+        }
     }
 
     /// Appends one packed particle; a `halo` comes without the integrator
@@ -290,26 +286,23 @@ impl Particles {
     }
 
     /// The fields that carry state from one step to the next (everything
-    /// else is recomputed each step): what migration and halos move.
-    fn persistent(&self) -> impl Iterator<Item = &Vec<f64>> + '_ {
-        [
-            &self.x,
-            &self.y,
-            &self.z,
-            &self.vx,
-            &self.vy,
-            &self.vz,
-            &self.dx,
-            &self.dy,
-            &self.dz,
-            &self.h,
-            &self.m,
-            &self.u,
-            &self.du_prev,
-        ]
-        .into_iter()
-        .chain(self.eos_ref.iter().filter(|f| !f.is_empty()))
-        .chain(std::iter::once(&self.alpha).filter(|_| self.alpha_on))
+    /// else is recomputed each step), in packing order: what migration
+    /// moves, and without the integrator's history (`dx`, `dy`, `dz`,
+    /// `du_prev`: set and read for owned particles only) what a halo
+    /// carries ([`HISTORY_FIELDS`] words fewer).
+    fn carried(&self, history: bool) -> impl Iterator<Item = &Vec<f64>> + '_ {
+        let with_history = move |_: &&Vec<f64>| history;
+        [&self.x, &self.y, &self.z, &self.vx, &self.vy, &self.vz]
+            .into_iter()
+            .chain(
+                [&self.dx, &self.dy, &self.dz]
+                    .into_iter()
+                    .filter(with_history),
+            )
+            .chain([&self.h, &self.m, &self.u])
+            .chain(std::iter::once(&self.du_prev).filter(with_history))
+            .chain(self.eos_ref.iter().filter(|f| !f.is_empty()))
+            .chain(std::iter::once(&self.alpha).filter(|_| self.alpha_on))
     }
 
     /// Bytes held per particle by the particle arrays (not counting
@@ -344,8 +337,12 @@ impl Particles {
     /// domain's sort needs: 13 to 15 gathers instead of up to 30).
     pub fn reorder_carried(&mut self, perm: &[u32], scratch: &mut Vec<u64>) {
         assert_eq!(perm.len(), self.len(), "permutation length");
-        let (carried, recomputed) = self.fields_by_kind_mut();
-        for f in carried {
+        let FieldsByKind {
+            halo,
+            history,
+            recomputed,
+        } = self.fields_by_kind_mut();
+        for f in halo.into_iter().chain(history) {
             apply_permutation_f64(perm, f, scratch);
         }
         for (f, fill) in recomputed {
@@ -471,6 +468,13 @@ impl Particles {
 /// Fields of the integrator's history (see `Particles::history`).
 const HISTORY_FIELDS: usize = 4;
 
+/// The f64 fields of [`Particles::fields_by_kind_mut`].
+struct FieldsByKind<'a> {
+    halo: Vec<&'a mut Vec<f64>>,
+    history: Vec<&'a mut Vec<f64>>,
+    recomputed: Vec<(&'a mut Vec<f64>, f64)>,
+}
+
 /// One field of [`ParticleFields::place_halos`]: the halos (from
 /// `n_owned` on) gathered in `order` into `scratch`, the owned block
 /// shifted by `n_low`, the halos written around it.
@@ -515,12 +519,12 @@ impl ParticleFields for Particles {
     }
 
     fn packed_words(&self) -> usize {
-        1 + self.persistent().count()
+        1 + self.carried(true).count()
     }
 
     fn pack(&self, i: usize, out: &mut Vec<u64>) {
         out.push(self.id[i]);
-        out.extend(self.persistent().map(|f| f[i].to_bits()));
+        out.extend(self.carried(true).map(|f| f[i].to_bits()));
     }
 
     fn push_packed(&mut self, words: &[u64]) {
@@ -533,16 +537,44 @@ impl ParticleFields for Particles {
 
     fn pack_halo(&self, i: usize, out: &mut Vec<u64>) {
         out.push(self.id[i]);
-        let history = self.history();
-        out.extend(
-            self.persistent()
-                .filter(|f| !history.iter().any(|h| std::ptr::eq(*h, *f)))
-                .map(|f| f[i].to_bits()),
-        );
+        out.extend(self.carried(false).map(|f| f[i].to_bits()));
+    }
+
+    fn pack_halos(&self, idx: &[u32], out: &mut Vec<u64>) {
+        let fields: Vec<&[f64]> = self.carried(false).map(Vec::as_slice).collect();
+        out.reserve(idx.len() * (1 + fields.len()));
+        for &i in idx {
+            let i = i as usize;
+            out.push(self.id[i]);
+            out.extend(fields.iter().map(|f| f[i].to_bits()));
+        }
     }
 
     fn push_halo(&mut self, words: &[u64]) {
         self.push_words(words, true);
+    }
+
+    fn push_halos(&mut self, packed: &[u64]) {
+        let words = self.halo_words();
+        assert_eq!(packed.len() % words, 0, "packed halos of {words} words");
+        let n = self.len() + packed.len() / words;
+        let rows = || packed.chunks_exact(words);
+        self.id.extend(rows().map(|r| r[0]));
+        let FieldsByKind {
+            halo,
+            history,
+            recomputed,
+        } = self.fields_by_kind_mut();
+        for (k, f) in halo.into_iter().enumerate() {
+            f.extend(rows().map(|r| f64::from_bits(r[1 + k])));
+        }
+        for f in history {
+            f.resize(n, 0.0);
+        }
+        for (f, fill) in recomputed {
+            f.resize(n, fill);
+        }
+        self.nc.resize(n, 0);
     }
 
     fn keep(&mut self, range: Range<usize>) {

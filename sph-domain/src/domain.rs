@@ -274,10 +274,15 @@ impl<C: Communicator> Domain<C> {
             let mut recv_ranks = Vec::with_capacity(received.len());
             p.reserve(received.iter().map(|(_, b)| b.len() / words.max(1)).sum());
             for (r, buf) in received {
-                recv_ranks.push((r, buf.len() / words.max(1)));
-                for chunk in buf.chunks_exact(words) {
-                    p.push_halo(chunk);
+                if buf.len() % words.max(1) != 0 {
+                    return Err(DomainError::Mismatch {
+                        peer: r,
+                        expected: buf.len() - buf.len() % words.max(1),
+                        got: buf.len(),
+                    });
                 }
+                recv_ranks.push((r, buf.len() / words.max(1)));
+                p.push_halos(&buf);
             }
             n_low = self.place_halos(p, bbox, n_owned, klo);
             // Halo slots: the k-th halo received sits where the sort put it.
@@ -465,9 +470,7 @@ impl<C: Communicator> Domain<C> {
             .iter()
             .map(|(r, idx)| {
                 let mut buf = Vec::with_capacity(idx.len() * p.halo_words());
-                for &i in idx {
-                    p.pack_halo(i as usize, &mut buf);
-                }
+                p.pack_halos(idx, &mut buf);
                 (*r, buf)
             })
             .collect();

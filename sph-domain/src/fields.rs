@@ -45,6 +45,23 @@ pub trait ParticleFields {
     fn push_halo(&mut self, words: &[u64]) {
         self.push_packed(words);
     }
+    /// Appends the particles `idx`, packed as halos, to `out` (a container
+    /// can set up its field list once). Default: [`pack_halo`](Self::pack_halo)
+    /// for each.
+    fn pack_halos(&self, idx: &[u32], out: &mut Vec<u64>) {
+        for &i in idx {
+            self.pack_halo(i as usize, out);
+        }
+    }
+    /// Appends every halo of `packed` (`halo_words()` words each; a
+    /// container can fill its arrays field by field). Default:
+    /// [`push_halo`](Self::push_halo) for each.
+    fn push_halos(&mut self, packed: &[u64]) {
+        let words = self.halo_words().max(1);
+        for chunk in packed.chunks_exact(words) {
+            self.push_halo(chunk);
+        }
+    }
     /// Makes room for `additional` more particles before a run of
     /// [`push_packed`](Self::push_packed). The domain calls it with the exact
     /// count of arrivals, so a container can grow its arrays to what they
