@@ -504,18 +504,16 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         &self.list
     }
 
-    /// On several ranks, frees the buffers every step rebuilds from
-    /// scratch (neighbour lists, octrees, pair factors, velocity
-    /// divergence, volume elements) before the sync, whose halo messages
-    /// then reuse the memory instead of adding to the peak. Measured
-    /// (Sedov 80^3, 30 steps, `std`, 2 ranks x 1 thread): peak RSS per rank
-    /// 108 MiB with these and the tree freed after the search, 123 MiB
-    /// without, the time per step within noise. One rank has no halo
-    /// messages, and there re-faulting the pages costs 4-5% of the step
-    /// with 2 threads (0.536-0.542 against 0.511-0.523 s/step), so the
-    /// buffers stay.
+    /// Where the domain releases step buffers
+    /// ([`Domain::releases_step_buffers`]: on several ranks), frees the
+    /// buffers every step rebuilds from scratch (neighbour lists, octrees,
+    /// pair factors, velocity divergence, volume elements) before the
+    /// sync, whose halo messages then reuse the memory instead of adding
+    /// to the peak. Measured (Sedov 80^3, 30 steps, `std`, 2 ranks x 1
+    /// thread): peak RSS per rank 108 MiB with these and the tree freed
+    /// after the search, 123 MiB without, the time per step within noise.
     fn release_step_buffers(&mut self) {
-        if self.domain.comm().size() == 1 {
+        if !self.domain.releases_step_buffers() {
             return;
         }
         self.list = CompactNeighborList::new();
@@ -539,7 +537,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
     /// ([`release_step_buffers`](Self::release_step_buffers)): the momentum
     /// stage's pair factors then take its place.
     fn release_tree_after_search(&mut self) {
-        if self.gravity.is_none() && self.domain.comm().size() > 1 {
+        if self.gravity.is_none() && self.domain.releases_step_buffers() {
             self.tree = Octree::default();
         }
     }
