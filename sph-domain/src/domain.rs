@@ -5,7 +5,7 @@
 
 use crate::global_tree::{Assignment, GlobalTree};
 use crate::halo::candidate_cells;
-use crate::{halo_placement, DomainError, ParticleFields};
+use crate::{DomainError, ParticleFields};
 use rayon::prelude::*;
 use sph_comm::{Communicator, ReduceOp};
 use sph_tree::{compute_keys, Boundary, BoundingBox, Curve, KeySorter};
@@ -308,7 +308,7 @@ impl<C: Communicator> Domain<C> {
                 .collect();
             for (r, count) in recv_ranks {
                 let slots: Vec<u32> = (next..next + count)
-                    .map(|old| self.scratch_keys[old] as u32)
+                    .map(|old| self.scratch_keys[old - n_owned] as u32)
                     .collect();
                 next += count;
                 match peers.iter_mut().find(|q| q.rank == r) {
@@ -487,7 +487,8 @@ impl<C: Communicator> Domain<C> {
     /// Puts the halos appended after the `n_owned` owned particles into
     /// curve order around them: halos with keys below `klo` first, then the
     /// owned particles, then the rest. Returns the number of leading halos
-    /// and leaves in `scratch_keys[old]` the new index of each old index.
+    /// and leaves in `scratch_keys[k]` the new index of the k-th halo
+    /// received (old index `n_owned + k`).
     fn place_halos<P: ParticleFields>(
         &mut self,
         p: &mut P,
@@ -510,7 +511,6 @@ impl<C: Communicator> Domain<C> {
         let mut order: Vec<u32> = (0..(n - n_owned) as u32).collect();
         order.sort_unstable_by_key(|&a| (halo_keys[a as usize], ids[a as usize]));
         let n_low = order.partition_point(|&a| halo_keys[a as usize] < klo);
-        halo_placement(n_owned, &order, n_low, &mut self.perm);
         let mut keys = Vec::with_capacity(n);
         keys.extend(order[..n_low].iter().map(|&a| halo_keys[a as usize]));
         keys.extend_from_slice(&self.keys[..n_owned]);
@@ -520,10 +520,12 @@ impl<C: Communicator> Domain<C> {
         // full reorder of every field took 10 ms of rank 0's 47 ms sync
         // (Sedov 80^3, 2 ranks).
         p.place_halos(n_owned, &order, n_low, &mut self.scratch);
-        // Inverse permutation: new index of each old index.
+        // New index of each halo: its rank in `order`, past the owned
+        // block for those above it.
         self.scratch_keys.clear();
-        self.scratch_keys.resize(n, 0);
-        for (new, &old) in self.perm.iter().enumerate() {
+        self.scratch_keys.resize(n - n_owned, 0);
+        for (k, &old) in order.iter().enumerate() {
+            let new = if k < n_low { k } else { n_owned + k };
             self.scratch_keys[old as usize] = new as u64;
         }
         n_low
