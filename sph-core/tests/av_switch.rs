@@ -463,10 +463,7 @@ proptest! {
         let mut s = lattice(10, 0.8, 60.0, seed);
         let mut rng = Rng(seed ^ 0xABCD);
         for i in 0..s.p.len() {
-            s.p.vx[i] = rng.uniform() - 0.5;
-            s.p.vy[i] = rng.uniform() - 0.5;
-            s.p.vz[i] = rng.uniform() - 0.5;
-            s.p.u[i] = 1.0 + rng.uniform();
+            common::random_flow(&mut s.p, i, || rng.uniform());
             s.p.h[i] *= 1.0 + 0.5 * (rng.uniform() - 0.5);
         }
         refresh(&mut s);

@@ -175,10 +175,7 @@ proptest! {
         let mut s = lattice(10, 0.5, 100.0, seed);
         let mut rng = Rng(seed ^ 0xC1EA);
         for i in 0..s.p.len() {
-            s.p.vx[i] = rng.uniform() - 0.5;
-            s.p.vy[i] = rng.uniform() - 0.5;
-            s.p.vz[i] = rng.uniform() - 0.5;
-            s.p.u[i] = 1.0 + rng.uniform();
+            common::random_flow(&mut s.p, i, || rng.uniform());
         }
         compute_density(&mut s);
         compute_iad(&mut s);
@@ -359,10 +356,7 @@ proptest! {
         let mut s = lattice(10, 0.8, 60.0, seed);
         let mut rng = Rng(seed ^ 0xABCD);
         for i in 0..s.p.len() {
-            s.p.vx[i] = rng.uniform() - 0.5;
-            s.p.vy[i] = rng.uniform() - 0.5;
-            s.p.vz[i] = rng.uniform() - 0.5;
-            s.p.u[i] = 1.0 + rng.uniform();
+            common::random_flow(&mut s.p, i, || rng.uniform());
             // h varying by +-25%: lists built for these h differ between
             // partners unless the search is symmetric.
             s.p.h[i] *= 1.0 + 0.5 * (rng.uniform() - 0.5);
@@ -681,10 +675,7 @@ proptest! {
         let mut s = lattice(9, 0.8, 50.0, seed);
         let mut rng = Rng(seed ^ 0x1234);
         for i in 0..s.p.len() {
-            s.p.vx[i] = rng.uniform() - 0.5;
-            s.p.vy[i] = rng.uniform() - 0.5;
-            s.p.vz[i] = rng.uniform() - 0.5;
-            s.p.u[i] = 1.0 + rng.uniform();
+            common::random_flow(&mut s.p, i, || rng.uniform());
             s.p.h[i] *= 1.0 + 0.5 * (rng.uniform() - 0.5);
         }
         let keys = std::mem::take(&mut s.keys);

@@ -341,10 +341,7 @@ proptest! {
         let mut rng = Rng(seed ^ 0x5EED);
         let mut alpha = vec![0.0; s.p.len()];
         for (i, a) in alpha.iter_mut().enumerate() {
-            s.p.vx[i] = rng.uniform() - 0.5;
-            s.p.vy[i] = rng.uniform() - 0.5;
-            s.p.vz[i] = rng.uniform() - 0.5;
-            s.p.u[i] = 1.0 + rng.uniform();
+            common::random_flow(&mut s.p, i, || rng.uniform());
             s.p.h[i] *= 1.0 + 0.5 * (rng.uniform() - 0.5);
             *a = 0.05 + 0.95 * rng.uniform();
         }

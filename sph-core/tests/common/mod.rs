@@ -22,3 +22,13 @@ pub fn conservation_errors(p: &Particles) -> (f64, f64) {
     let momentum = mom.iter().fold(0.0f64, |m, c| m.max(c.abs())) / scale;
     (momentum, de.abs() / de_scale)
 }
+
+/// Particle `i` of a random flow for the conservation checks: each velocity
+/// component uniform in [-0.5, 0.5), u uniform in [1, 2), drawn from
+/// `uniform` (values in [0, 1)) in that order.
+pub fn random_flow(p: &mut Particles, i: usize, mut uniform: impl FnMut() -> f64) {
+    p.vx[i] = uniform() - 0.5;
+    p.vy[i] = uniform() - 0.5;
+    p.vz[i] = uniform() - 0.5;
+    p.u[i] = 1.0 + uniform();
+}
