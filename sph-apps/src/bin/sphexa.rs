@@ -288,7 +288,7 @@ struct RunArgs {
     /// AV cleaning), `contact` (pressure-energy volumes,
     /// kernel gradients, grad-h, alpha = 1), `noh` (kernel gradients, grad-h,
     /// switches up to alpha 0.7), `evrard` (kernel gradients, no grad-h,
-    /// switches up to alpha 0.5, conductivity 1); `sphexa cases` lists them. The options
+    /// switches up to alpha 0.5, conductivity 3); `sphexa cases` lists them. The options
     /// below override it one by one.
     #[arg(long, value_name = "NAME")]
     scheme: Option<String>,
@@ -319,7 +319,7 @@ struct RunArgs {
     av_switches: Option<Switch>,
     /// Artificial conductivity of internal energy alpha_u, a number >= 0
     /// (0 = off; ~1 smooths wall heating at shocks and walls). Default: the
-    /// scheme's (off in every preset).
+    /// scheme's (1 in `ve-ac`, 3 in `evrard`, off in the other presets).
     #[arg(long, allow_negative_numbers = true, value_parser = parse_non_negative)]
     conductivity: Option<f64>,
     /// Artificial stress epsilon against the tensile instability (Monaghan

@@ -3,7 +3,12 @@
 //! energies of a 1-D Lagrangian reference.
 
 use super::{Layout, Listing, cube_lattice, field_set, initial_h, Case, EnergyPoint, InitialState, Physics, Scheme, Share};
+use crate::glass::{self, GlassSpec};
 use crate::AppError;
+
+/// Particles per side of the glass block tiled to fill the cube the
+/// sphere is cut from.
+const GLASS_SIDE: usize = 15;
 use sph_core::{Eos, HydroConfig};
 use sph_tree::{Boundary, BoundingBox};
 
@@ -12,14 +17,18 @@ use sph_tree::{Boundary, BoundingBox};
 pub struct EvrardCollapse;
 
 /// Kernel gradients without grad-h terms, viscosity switches up to 0.5,
-/// artificial conductivity 1 and pairs softened within `(h_i + h_j) / 4`.
+/// artificial conductivity 3 and pairs softened within `(h_i + h_j) / 4`.
 /// With the paper's scheme (IAD, grad-h, alpha = 1, softening `h_i + h_j`)
 /// the collapse lags at these resolutions: at 20^3, t = 0.8, E_kin is 41%
 /// low; the viscosity damps the smooth infall and the h-dependent
-/// softening costs 3.5% of the energy by t = 0.8. The conductivity
-/// thermalises the bounce: at 30^3 (with [`COURANT`]) E_kin at t = 1.0
-/// is 24% above the reference instead of 44%, and at t = 2.0 every energy
-/// is nearer the reference, at 20^3 and 40^3 as well (README, Evrard).
+/// softening costs 3.5% of the energy by t = 0.8. Past the bounce the
+/// shocked core keeps a velocity dispersion (on a lattice at 30^3,
+/// t = 1.0, with conductivity 1: 20 times the kinetic energy the 1-D
+/// reference has inside r = 0.2, radial and tangential alike); conduction
+/// of its pressure noise turns it into heat. On the glass, E_kin at
+/// t = 1.0 is +0.6% of the reference at 30^3 and +3.4% at 40^3 with
+/// conductivity 3, +13.6% and +13.8% with 1; 3 was chosen at 30^3 on the
+/// lattice from 1, 2, 2.5, 3, 4 (README, Evrard).
 pub const SCHEME: Scheme = Scheme::EVRARD;
 
 /// Courant factor: twice the default 0.2. The step is set by the Courant
@@ -89,28 +98,54 @@ impl Case for EvrardCollapse {
         }
     }
 
-    /// The unit sphere cut from a `side^3` lattice of the cube
-    /// `[-1, 1]^3`, stretched radially (`r -> r^(3/2)`) so that the
-    /// enclosed mass goes as `r^2`, i.e. `rho = 1 / (2 pi r)`; equal masses
-    /// `1/N`, at rest, `u = 0.05`; h from the local density.
+    /// The unit sphere cut from the cube `[-1, 1]^3` filled at spacing
+    /// `2 / side` with a glass ([`GLASS_SIDE`]^3 block, tiled; a cubic
+    /// lattice with [`Layout::Lattice`]), stretched radially
+    /// (`r -> (r / R)^(3/2)`, with `R` the radius of the ball the points'
+    /// cells fill) so that the enclosed mass goes as `r^2`, i.e.
+    /// `rho = 1 / (2 pi r)`; equal masses `1/N`, at rest, `u = 0.05`; h from
+    /// the local density. Past the bounce a lattice leaves more velocity
+    /// dispersion in the shocked core than a glass (E_kin at t = 1.0, 30^3,
+    /// alpha 0.5 and conductivity 1: +18.5% of the reference on the
+    /// lattice, +13.6% on the glass).
     fn initial_state(
         &self,
         side: usize,
         config: &HydroConfig,
         share: Share,
-        _layout: &Layout,
+        layout: &Layout,
     ) -> Result<InitialState, AppError> {
-        let pts: Vec<[f64; 3]> = cube_lattice(side, -1.0, 2.0)
-            .filter(|q| q[0] * q[0] + q[1] * q[1] + q[2] * q[2] < 1.0)
-            .collect();
+        let inside = |q: &[f64; 3]| q[0] * q[0] + q[1] * q[1] + q[2] * q[2] < 1.0;
+        let pts: Vec<[f64; 3]> = match layout {
+            Layout::Glass { kernel, dir } => {
+                let spec = GlassSpec {
+                    side: GLASS_SIDE.min(side),
+                    kernel: *kernel,
+                    ng0: config.neighbors.ng0,
+                    ngmax: config.neighbors.ngmax,
+                };
+                let g = glass::cached(&spec, dir)?;
+                g.fill([-1.0; 3], [1.0; 3], 2.0 / side as f64)
+                    .into_iter()
+                    .filter(inside)
+                    .collect()
+            }
+            Layout::Lattice => cube_lattice(side, -1.0, 2.0).filter(inside).collect(),
+        };
         let n = pts.len();
         let (mut p, mine) = share.particles(n, field_set(config));
         let m = 1.0 / n as f64;
+        // The cut lattice fills the ball of the radius whose volume is n
+        // lattice cells, a little over 1 (1.0045 at 30^3); mapping that
+        // radius to 1 gives the enclosed mass r^2 up to the surface (mapping
+        // 1 to 1 leaves the sphere 0.9% less bound than -2/3).
+        let cell = 2.0 / side as f64;
+        let filled_radius = (3.0 * n as f64 / (4.0 * std::f64::consts::PI)).cbrt() * cell;
         for (i, q) in pts[mine].iter().enumerate() {
             let r = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
-            let s = r.sqrt(); // r^(3/2) / r
-            (p.x[i], p.y[i], p.z[i]) = (q[0] * s, q[1] * s, q[2] * s);
+            let s = (r / filled_radius).sqrt() / filled_radius; // r_new / r
             let r_new = r * s;
+            (p.x[i], p.y[i], p.z[i]) = (q[0] * s, q[1] * s, q[2] * s);
             // Number density N rho / M = N / (2 pi r): a uniform set of that
             // density in the unit volume has 2 pi r / N per particle.
             let volume_per = 2.0 * std::f64::consts::PI * r_new.max(0.5 / side as f64) / n as f64;

@@ -155,7 +155,9 @@ impl TimingsCsv {
     }
 
     /// The last line, `mean_2..N`: the means over steps 2..N; then closes
-    /// the file.
+    /// the file. The line ends before the text column `dt_limit`, which has
+    /// no mean, so a reader that zips it with the header and parses every
+    /// field as a number (`../shared/bench/side-by-side`) never meets text.
     pub fn finish(mut self, totals: &StageTotals) -> Result<(), AppError> {
         let means: Vec<String> = totals
             .stage_means()
@@ -164,7 +166,7 @@ impl TimingsCsv {
             .collect();
         let dom = totals.domain();
         self.0.line_fmt(format_args!(
-            "mean_2..N,{},{:.6e},{},{},{:.6e},{:.6e},{:.0},{:.6e},{:.6e},",
+            "mean_2..N,{},{:.6e},{},{},{:.6e},{:.6e},{:.0},{:.6e},{:.6e}",
             means.join(","),
             totals.mean_step_s(),
             dom.owned_min,
