@@ -5,12 +5,12 @@
 use super::{Layout, Listing, cube_lattice, field_set, initial_h, Case, EnergyPoint, InitialState, Physics, Scheme, Share};
 use crate::glass::{self, GlassSpec};
 use crate::AppError;
-
-/// Particles per side of the glass block tiled to fill the cube the
-/// sphere is cut from.
-const GLASS_SIDE: usize = 15;
 use sph_core::{Eos, HydroConfig};
 use sph_tree::{Boundary, BoundingBox};
+
+/// Particles per side of the glass block tiled to fill the cube the
+/// sphere is cut from (fewer when the run's `side` is smaller).
+pub const GLASS_SIDE: usize = 15;
 
 /// The case (registered as `evrard`).
 #[derive(Debug, Clone, Copy)]
@@ -23,11 +23,11 @@ pub struct EvrardCollapse;
 /// low; the viscosity damps the smooth infall and the h-dependent
 /// softening costs 3.5% of the energy by t = 0.8. Past the bounce the
 /// shocked core keeps a velocity dispersion (on a lattice at 30^3,
-/// t = 1.0, with conductivity 1: 20 times the kinetic energy the 1-D
+/// t = 1.0, with conductivity 1: 30 times the kinetic energy the 1-D
 /// reference has inside r = 0.2, radial and tangential alike); conduction
 /// of its pressure noise turns it into heat. On the glass, E_kin at
-/// t = 1.0 is +0.6% of the reference at 30^3 and +3.4% at 40^3 with
-/// conductivity 3, +13.6% and +13.8% with 1; 3 was chosen at 30^3 on the
+/// t = 1.0 is +0.1% of the reference at 30^3 and +3.4% at 40^3 with
+/// conductivity 3, +13.3% and +13.6% with 1; 3 was chosen at 30^3 on the
 /// lattice from 1, 2, 2.5, 3, 4 (README, Evrard).
 pub const SCHEME: Scheme = Scheme::EVRARD;
 
@@ -106,8 +106,8 @@ impl Case for EvrardCollapse {
     /// `rho = 1 / (2 pi r)`; equal masses `1/N`, at rest, `u = 0.05`; h from
     /// the local density. Past the bounce a lattice leaves more velocity
     /// dispersion in the shocked core than a glass (E_kin at t = 1.0, 30^3,
-    /// alpha 0.5 and conductivity 1: +18.5% of the reference on the
-    /// lattice, +13.6% on the glass).
+    /// alpha 0.5 and conductivity 1: +18.4% of the reference on the
+    /// lattice, +13.3% on the glass).
     fn initial_state(
         &self,
         side: usize,
