@@ -104,12 +104,9 @@ impl GlassSpec {
     }
 
     fn check(&self) -> Result<(), AppError> {
-        // Below 6 per side the kernel's support (about 2.9 spacings at
-        // ng0 = 100) reaches over half the block: a particle would meet
-        // its own periodic image.
-        if self.side < 6 || self.side > 200 {
+        if !(MIN_SIDE..=MAX_SIDE).contains(&self.side) {
             return Err(AppError::Usage(format!(
-                "glass: {} particles per side; allowed 6 to 200",
+                "glass: {} particles per side; allowed {MIN_SIDE} to {MAX_SIDE}",
                 self.side
             )));
         }
@@ -329,6 +326,13 @@ pub fn cached(spec: &GlassSpec, dir: &Path) -> Result<Glass, AppError> {
     std::fs::rename(&mine, &path).map_err(|e| AppError::io(&path, e))?;
     Ok(glass)
 }
+
+/// Fewest particles per side of a glass block: below 6 the kernel's
+/// support (about 2.9 spacings at ng0 = 100) reaches over half the block,
+/// and a particle would meet its own periodic image.
+pub const MIN_SIDE: usize = 6;
+/// Most particles per side of a glass block.
+pub const MAX_SIDE: usize = 200;
 
 /// Density scatter at which [`cached`] stops relaxing.
 pub const TOLERANCE: f64 = 0.005;

@@ -174,6 +174,24 @@ fn a_tiny_sedov_run_writes_its_outputs() {
     assert!(stdout.contains("sedov: 512 particles, 2 steps"), "{stdout}");
 }
 
+/// A side below the smallest glass block still runs: Evrard's sphere is
+/// cut from a glass of at least `glass::MIN_SIDE` per side, tiled at the
+/// asked spacing (35 particles at `-n 4`).
+#[test]
+fn evrard_below_the_smallest_glass_block_runs() {
+    let dir = scratch("evrard-tiny");
+    let out = Command::new(env!("CARGO_BIN_EXE_sphexa"))
+        .args(["run", "evrard", "-n", "4", "--steps", "2", "-q", "--out"])
+        .arg(dir.join("out"))
+        .env("SPHEXA_GLASS_DIR", dir.join("glass"))
+        .output()
+        .expect("the sphexa binary runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "sphexa failed: {stderr}");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("evrard: 35 particles, 2 steps"), "{stdout}");
+}
+
 #[test]
 fn unknown_scheme_is_named_with_the_presets() {
     let e = refused(&["sedov", "--scheme", "sph-ve", "--steps", "1", "-q"]);

@@ -9,7 +9,8 @@ use sph_core::{Eos, HydroConfig};
 use sph_tree::{Boundary, BoundingBox};
 
 /// Particles per side of the glass block tiled to fill the cube the
-/// sphere is cut from (fewer when the run's `side` is smaller).
+/// sphere is cut from (the run's `side` when that is smaller, but at least
+/// [`glass::MIN_SIDE`]).
 pub const GLASS_SIDE: usize = 15;
 
 /// The case (registered as `evrard`).
@@ -119,7 +120,7 @@ impl Case for EvrardCollapse {
         let pts: Vec<[f64; 3]> = match layout {
             Layout::Glass { kernel, dir } => {
                 let spec = GlassSpec {
-                    side: GLASS_SIDE.min(side),
+                    side: side.clamp(glass::MIN_SIDE, GLASS_SIDE),
                     kernel: *kernel,
                     ng0: config.neighbors.ng0,
                     ngmax: config.neighbors.ngmax,
