@@ -7,7 +7,7 @@
 //! t = 1.0 (the bounce) and t = 2.0 (after it); total energy (including
 //! E_grav) conserved to 1e-2 through the bounce (t <= 1.5).
 //!
-//! Measured: t = 0.8 -2.9% / +0.9% / -0.6%, t = 1.0 +0.6% / -2.2% /
+//! Measured: t = 0.8 -2.9% / +0.7% / -0.7%, t = 1.0 +0.1% / -2.0% /
 //! -1.4%, t = 2.0 -4.2% / +5.1% / +1.7%, drift 4.8e-4 (~1 minute on 2
 //! cores); at 20^3 every entry is within 6.5%, at 40^3 within 4.7%, so
 //! 7.5% is the reference's 2% above the spread over resolutions. E_kin at

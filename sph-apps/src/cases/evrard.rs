@@ -116,6 +116,7 @@ impl Case for EvrardCollapse {
         share: Share,
         layout: &Layout,
     ) -> Result<InitialState, AppError> {
+        let cell = 2.0 / side as f64;
         let inside = |q: &[f64; 3]| q[0] * q[0] + q[1] * q[1] + q[2] * q[2] < 1.0;
         let pts: Vec<[f64; 3]> = match layout {
             Layout::Glass { kernel, dir } => {
@@ -126,7 +127,7 @@ impl Case for EvrardCollapse {
                     ngmax: config.neighbors.ngmax,
                 };
                 let g = glass::cached(&spec, dir)?;
-                g.fill([-1.0; 3], [1.0; 3], 2.0 / side as f64)
+                g.fill([-1.0; 3], [1.0; 3], cell)
                     .into_iter()
                     .filter(inside)
                     .collect()
@@ -136,11 +137,10 @@ impl Case for EvrardCollapse {
         let n = pts.len();
         let (mut p, mine) = share.particles(n, field_set(config));
         let m = 1.0 / n as f64;
-        // The cut lattice fills the ball of the radius whose volume is n
-        // lattice cells, a little over 1 (1.0045 at 30^3); mapping that
+        // The n points cut at r < 1 fill the ball whose volume is n cells,
+        // a little over 1 (1.0045 for the 30^3 lattice); mapping that
         // radius to 1 gives the enclosed mass r^2 up to the surface (mapping
         // 1 to 1 leaves the sphere 0.9% less bound than -2/3).
-        let cell = 2.0 / side as f64;
         let filled_radius = (3.0 * n as f64 / (4.0 * std::f64::consts::PI)).cbrt() * cell;
         for (i, q) in pts[mine].iter().enumerate() {
             let r = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
