@@ -314,18 +314,19 @@ impl<'a> From<HydroState<'a>> for FlowState<'a> {
 }
 
 /// Weight of the pair term `d = x_i - x_j` before the final factors, for
-/// a lane of targets at distances `r` (`r > 0`): with IAD `W` shape (the
-/// gradient is `-C d W`), plain `S'(v) / r` (the gradient is
-/// `K/h^4 S'(v) d / r`). Lanes at `r = 0` (the target itself) get 0.
+/// a lane of targets at squared distances `r2` (`r2 > 0`): with IAD `W`
+/// shape (the gradient is `-C d W`; from `r2` without a root), plain
+/// `S'(v) / r` (the gradient is `K/h^4 S'(v) d / r`). Lanes at `r = 0`
+/// (the target itself) get 0.
 #[inline(always)]
-fn pair_weight<K: Kernel, const IAD: bool>(kernel: &K, r: F64s, inv_h: F64s) -> F64s {
-    let v = r * inv_h;
+fn pair_weight<K: Kernel, const IAD: bool>(kernel: &K, r2: F64s, inv_h: F64s) -> F64s {
     if IAD {
-        kernel.shape_lanes(v)
+        kernel.shape_sq_lanes(r2 * (inv_h * inv_h))
     } else {
+        let r = r2.sqrt();
         let zero = F64s::splat(0.0);
         let r_safe = F64s::select_positive(r, r, F64s::splat(1.0));
-        let w = kernel.shape_and_derivative_lanes(v).1 / r_safe;
+        let w = kernel.shape_and_derivative_lanes(r * inv_h).1 / r_safe;
         F64s::select_positive(r, w, zero)
     }
 }
@@ -356,9 +357,7 @@ impl<K: Kernel, const IAD: bool> PairStage for VelocityGradient<'_, K, IAD> {
 
     #[inline(always)]
     fn pair(&self, sums: &mut GradientSums, j: usize, d: [F64s; 3], r2: F64s) {
-        let f = &self.0;
-        let r = r2.sqrt();
-        self.add(sums, j, d, pair_weight::<K, IAD>(f.kernel, r, sums.1));
+        self.add(sums, j, d, pair_weight::<K, IAD>(self.0.kernel, r2, sums.1));
     }
 
     #[inline(always)]
@@ -577,7 +576,7 @@ impl<K: Kernel> PairStage for IadGradient<'_, K> {
 
     #[inline(always)]
     fn pair(&self, (tau, grad): &mut Self::Sums, j: usize, d: [F64s; 3], r2: F64s) {
-        let shape = self.tau.kernel.shape_lanes(r2.sqrt() * tau.0);
+        let shape = self.tau.kernel.shape_sq_lanes(r2 * (tau.0 * tau.0));
         self.tau.add(&mut tau.1, j, d, shape);
         self.grad.add(grad, j, d, shape);
     }
@@ -670,7 +669,7 @@ impl<K: Kernel, const IAD: bool> Indicator<'_, K, IAD> {
             t.v_sig = t.v_sig.max(vs * pair);
         }
         let w = f.m[j] / f.rho[j]
-            * pair_weight::<K, IAD>(f.kernel, r, t.inv_h)
+            * pair_weight::<K, IAD>(f.kernel, r2, t.inv_h)
             * (self.div_v[j] - t.div_i)
             * pair;
         for (sk, dk) in t.s.iter_mut().zip(d) {

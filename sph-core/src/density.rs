@@ -76,13 +76,13 @@ impl<K: Kernel, const GRAD_H: bool> PairStage for Density<'_, K, GRAD_H> {
 
     #[inline(always)]
     fn pair(&self, (inv_h, sum_w, sum_dh): &mut Self::Sums, j: usize, _: [F64s; 3], r2: F64s) {
-        let v = r2.sqrt() * *inv_h;
+        let v2 = r2 * (*inv_h * *inv_h);
         if GRAD_H {
-            let (w, dw) = self.kernel.shape_and_derivative_lanes(v);
+            let (w, vdw) = self.kernel.shape_and_v_derivative_sq_lanes(v2);
             *sum_w += self.m[j] * w;
-            *sum_dh += self.m[j] * (3.0 * w + v * dw);
+            *sum_dh += self.m[j] * (3.0 * w + vdw);
         } else {
-            *sum_w += self.m[j] * self.kernel.shape_lanes(v);
+            *sum_w += self.m[j] * self.kernel.shape_sq_lanes(v2);
         }
     }
 
@@ -289,15 +289,15 @@ impl<K: Kernel, const GRAD_H: bool> PairStage for VeDensity<'_, K, GRAD_H> {
 
     #[inline(always)]
     fn pair(&self, (inv_h, sk, sx, sm): &mut Self::Sums, j: usize, _: [F64s; 3], r2: F64s) {
-        let v = r2.sqrt() * *inv_h;
+        let v2 = r2 * (*inv_h * *inv_h);
         if GRAD_H {
-            let (w, dw) = self.kernel.shape_and_derivative_lanes(v);
-            let dh = 3.0 * w + v * dw;
+            let (w, vdw) = self.kernel.shape_and_v_derivative_sq_lanes(v2);
+            let dh = 3.0 * w + vdw;
             *sk += self.xm[j] * w;
             *sx += self.xm[j] * dh;
             *sm += self.m[j] * dh;
         } else {
-            *sk += self.xm[j] * self.kernel.shape_lanes(v);
+            *sk += self.xm[j] * self.kernel.shape_sq_lanes(v2);
         }
     }
 

@@ -191,8 +191,8 @@ impl<K: Kernel> PairStage for Tau<'_, K> {
 
     #[inline(always)]
     fn pair(&self, (inv_h, t): &mut Self::Sums, j: usize, d: [F64s; 3], r2: F64s) {
-        let v = r2.sqrt() * *inv_h;
-        self.add(t, j, d, self.kernel.shape_lanes(v));
+        let v2 = r2 * (*inv_h * *inv_h);
+        self.add(t, j, d, self.kernel.shape_sq_lanes(v2));
     }
 
     #[inline(always)]

@@ -596,10 +596,10 @@ fn scalar_reference(s: &Setup, gradients: Gradients) -> (Vec<f64>, Vec<f64>, [Ve
         let (mut sw, mut sd) = (0.0, 0.0);
         for j in s.list.neighbors(i) {
             let d = sep(pos(i), pos(j));
-            let v = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() * inv_h;
-            let (w, dw) = k.shape_and_derivative(v);
+            let v2 = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) * (inv_h * inv_h);
+            let (w, vdw) = k.shape_and_v_derivative_sq(v2);
             sw += p.m[j] * w;
-            sd += p.m[j] * (3.0 * w + v * dw);
+            sd += p.m[j] * (3.0 * w + vdw);
         }
         let h3 = inv_h * inv_h * inv_h;
         rho[i] = norm * h3 * sw;

@@ -52,6 +52,18 @@ fn sweep_lanes<K: Kernel>(kernel: &K, vs: &[f64]) -> f64 {
     acc.sum()
 }
 
+/// The squared-argument lane form of the density and IAD passes (`w` and
+/// `v w'` from `v^2`, no square root), over the same distances.
+fn sweep_sq_lanes<K: Kernel>(kernel: &K, vs: &[f64]) -> f64 {
+    let mut acc = F64s::splat(0.0);
+    for chunk in vs.chunks_exact(LANES) {
+        let v = F64s::from_array(chunk.try_into().expect("a lane"));
+        let (w, vdw) = kernel.shape_and_v_derivative_sq_lanes(black_box(v * v));
+        acc += w + vdw;
+    }
+    acc.sum()
+}
+
 fn bench<K: Kernel>(group: &mut BenchmarkGroup<'_, WallTime>, name: &str, kernel: &K, vs: &[f64]) {
     group.bench_function(name, |b| b.iter(|| black_box(sweep(kernel, vs))));
 }
@@ -83,6 +95,9 @@ fn sinc6(c: &mut Criterion) {
     });
     group.bench_function("polynomial-lanes", |b| {
         b.iter(|| black_box(sweep_lanes(&poly, &vs)))
+    });
+    group.bench_function("polynomial-squared-lanes", |b| {
+        b.iter(|| black_box(sweep_sq_lanes(&poly, &vs)))
     });
     group.finish();
 }

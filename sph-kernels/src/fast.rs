@@ -122,6 +122,26 @@ impl Kernel for FastKernel {
     }
 
     #[inline]
+    fn shape_sq(&self, v2: f64) -> f64 {
+        either!(self, k => k.shape_sq(v2))
+    }
+
+    #[inline]
+    fn shape_and_v_derivative_sq(&self, v2: f64) -> (f64, f64) {
+        either!(self, k => k.shape_and_v_derivative_sq(v2))
+    }
+
+    #[inline(always)]
+    fn shape_sq_lanes(&self, v2: F64s) -> F64s {
+        either!(self, k => k.shape_sq_lanes(v2))
+    }
+
+    #[inline(always)]
+    fn shape_and_v_derivative_sq_lanes(&self, v2: F64s) -> (F64s, F64s) {
+        either!(self, k => k.shape_and_v_derivative_sq_lanes(v2))
+    }
+
+    #[inline]
     fn support(&self) -> f64 {
         either!(self, k => k.support())
     }

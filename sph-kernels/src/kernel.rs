@@ -57,6 +57,42 @@ pub trait Kernel: Send + Sync {
         (F64s::from_array(w), F64s::from_array(dw))
     }
 
+    /// `w(v)` from the squared argument `v2 = v^2` (what a pair loop
+    /// has before any square root). The default takes the root; a
+    /// polynomial in `v^2` ([`Polynomial`](crate::Polynomial)) evaluates
+    /// without it. Lane forms: [`shape_sq_lanes`](Kernel::shape_sq_lanes).
+    #[inline]
+    fn shape_sq(&self, v2: f64) -> f64 {
+        self.shape(v2.sqrt())
+    }
+
+    /// `(w(v), v w'(v))` from the squared argument `v2 = v^2` (the
+    /// h-derivative of a kernel sum needs `3 w + v w'`); the default takes
+    /// the root.
+    #[inline]
+    fn shape_and_v_derivative_sq(&self, v2: f64) -> (f64, f64) {
+        let v = v2.sqrt();
+        let (w, dw) = self.shape_and_derivative(v);
+        (w, v * dw)
+    }
+
+    /// [`shape_sq`](Kernel::shape_sq) for a lane of squared arguments;
+    /// lane `l` equals `shape_sq(v2[l])` bit for bit.
+    #[inline]
+    fn shape_sq_lanes(&self, v2: F64s) -> F64s {
+        self.shape_lanes(v2.sqrt())
+    }
+
+    /// [`shape_and_v_derivative_sq`](Kernel::shape_and_v_derivative_sq)
+    /// for a lane of squared arguments; lane `l` equals its scalar form
+    /// bit for bit.
+    #[inline]
+    fn shape_and_v_derivative_sq_lanes(&self, v2: F64s) -> (F64s, F64s) {
+        let v = v2.sqrt();
+        let (w, dw) = self.shape_and_derivative_lanes(v);
+        (w, v * dw)
+    }
+
     /// Support radius in units of `h` (2.0 for every built-in kernel).
     #[inline]
     fn support(&self) -> f64 {
@@ -119,6 +155,22 @@ macro_rules! forward_kernel {
             #[inline]
             fn shape_and_derivative_lanes(&self, v: F64s) -> (F64s, F64s) {
                 (**self).shape_and_derivative_lanes(v)
+            }
+            #[inline]
+            fn shape_sq(&self, v2: f64) -> f64 {
+                (**self).shape_sq(v2)
+            }
+            #[inline]
+            fn shape_and_v_derivative_sq(&self, v2: f64) -> (f64, f64) {
+                (**self).shape_and_v_derivative_sq(v2)
+            }
+            #[inline]
+            fn shape_sq_lanes(&self, v2: F64s) -> F64s {
+                (**self).shape_sq_lanes(v2)
+            }
+            #[inline]
+            fn shape_and_v_derivative_sq_lanes(&self, v2: F64s) -> (F64s, F64s) {
+                (**self).shape_and_v_derivative_sq_lanes(v2)
             }
             #[inline]
             fn support(&self) -> f64 {

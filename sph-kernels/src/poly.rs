@@ -330,6 +330,74 @@ impl Kernel for Polynomial {
     }
 
     #[inline]
+    fn shape_sq(&self, v2: f64) -> f64 {
+        match self.variable {
+            FitVariable::Square => {
+                let w = horner(&self.w, self.terms, self.scale * v2 - 1.0);
+                if v2 < self.support * self.support {
+                    w
+                } else {
+                    0.0
+                }
+            }
+            FitVariable::Radius => self.shape(v2.sqrt()),
+        }
+    }
+
+    #[inline]
+    fn shape_and_v_derivative_sq(&self, v2: f64) -> (f64, f64) {
+        match self.variable {
+            FitVariable::Square => {
+                let t = self.scale * v2 - 1.0;
+                let w = horner(&self.w, self.terms, t);
+                let vdw = horner(&self.dw, self.terms - 1, t) * v2;
+                if v2 < self.support * self.support {
+                    (w, vdw)
+                } else {
+                    (0.0, 0.0)
+                }
+            }
+            FitVariable::Radius => {
+                let v = v2.sqrt();
+                let (w, dw) = self.shape_and_derivative(v);
+                (w, v * dw)
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn shape_sq_lanes(&self, v2: F64s) -> F64s {
+        match self.variable {
+            FitVariable::Square => {
+                let w = horner_lanes(&self.w, self.terms, v2 * self.scale - 1.0);
+                v2.lt(F64s::splat(self.support * self.support))
+                    .select(w, F64s::splat(0.0))
+            }
+            FitVariable::Radius => self.shape_lanes(v2.sqrt()),
+        }
+    }
+
+    #[inline(always)]
+    fn shape_and_v_derivative_sq_lanes(&self, v2: F64s) -> (F64s, F64s) {
+        match self.variable {
+            // w' = v P'(t) dw-coefficients, so v w' = v^2 (...): no root.
+            FitVariable::Square => {
+                let t = v2 * self.scale - 1.0;
+                let w = horner_lanes(&self.w, self.terms, t);
+                let vdw = horner_lanes(&self.dw, self.terms - 1, t) * v2;
+                let inside = v2.lt(F64s::splat(self.support * self.support));
+                let zero = F64s::splat(0.0);
+                (inside.select(w, zero), inside.select(vdw, zero))
+            }
+            FitVariable::Radius => {
+                let v = v2.sqrt();
+                let (w, dw) = self.shape_and_derivative_lanes(v);
+                (w, v * dw)
+            }
+        }
+    }
+
+    #[inline]
     fn support(&self) -> f64 {
         self.support
     }

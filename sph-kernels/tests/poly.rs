@@ -91,3 +91,39 @@ proptest! {
         common::lanes_match_scalar(&choice.fast().unwrap(), v)?;
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// The squared-argument forms (what density and IAD call, without a
+    /// square root) give `w(v)` and `v w'(v)` of the root's forms to a few
+    /// rounding steps of the scale (the polynomial's variable `v^2` is
+    /// rounded once instead of through the root), and zero outside the
+    /// support.
+    #[test]
+    fn squared_argument_forms_match_the_root_forms(
+        choice in any_choice(),
+        v in proptest::array::uniform8(0.0f64..2.2),
+    ) {
+        let fast = choice.fast().unwrap();
+        let (sw, sdw) = scales(&fast);
+        let lanes = sph_kernels::F64s::from_array(v);
+        let v2 = lanes * lanes;
+        let w_root = fast.shape_lanes(lanes).to_array();
+        let (w_r, dw_r) = fast.shape_and_derivative_lanes(lanes);
+        let (w_sq, vdw_sq) = fast.shape_and_v_derivative_sq_lanes(v2);
+        let w_sq_only = fast.shape_sq_lanes(v2).to_array();
+        let (w_r, dw_r, w_sq, vdw_sq) =
+            (w_r.to_array(), dw_r.to_array(), w_sq.to_array(), vdw_sq.to_array());
+        for l in 0..8 {
+            let tol = 1e-13;
+            prop_assert!((w_sq_only[l] - w_root[l]).abs() <= tol * sw, "{choice} v = {}: {} vs {}", v[l], w_sq_only[l], w_root[l]);
+            prop_assert!((w_sq[l] - w_r[l]).abs() <= tol * sw, "{choice} v = {}", v[l]);
+            prop_assert!((vdw_sq[l] - v[l] * dw_r[l]).abs() <= tol * 2.0 * sdw, "{choice} v = {}: {} vs {}", v[l], vdw_sq[l], v[l] * dw_r[l]);
+            if v[l] >= 2.0 {
+                prop_assert_eq!(w_sq_only[l], 0.0);
+                prop_assert_eq!(vdw_sq[l], 0.0);
+            }
+        }
+    }
+}

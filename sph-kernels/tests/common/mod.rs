@@ -54,5 +54,16 @@ pub fn lanes_match_scalar(k: &dyn Kernel, v: [f64; LANES]) -> Result<(), TestCas
         prop_assert_eq!(w2[l].to_bits(), sw.to_bits(), "v = {}", v[l]);
         prop_assert_eq!(dw[l].to_bits(), sdw.to_bits(), "v = {}", v[l]);
     }
+    // The squared-argument forms, at v^2.
+    let v2 = lanes * lanes;
+    let w = k.shape_sq_lanes(v2).to_array();
+    let (w2, vdw) = k.shape_and_v_derivative_sq_lanes(v2);
+    let (w2, vdw) = (w2.to_array(), vdw.to_array());
+    for (l, v2) in v2.to_array().into_iter().enumerate() {
+        let (sw, svdw) = k.shape_and_v_derivative_sq(v2);
+        prop_assert_eq!(w[l].to_bits(), k.shape_sq(v2).to_bits(), "v2 = {}", v2);
+        prop_assert_eq!(w2[l].to_bits(), sw.to_bits(), "v2 = {}", v2);
+        prop_assert_eq!(vdw[l].to_bits(), svdw.to_bits(), "v2 = {}", v2);
+    }
     Ok(())
 }
