@@ -5,7 +5,7 @@
 
 use crate::global_tree::{Assignment, GlobalTree};
 use crate::halo::candidate_cells;
-use crate::{DomainError, ParticleFields};
+use crate::{halo_slot, DomainError, ParticleFields};
 use rayon::prelude::*;
 use sph_comm::{Communicator, ReduceOp};
 use sph_tree::{compute_keys, Boundary, BoundingBox, Curve, KeySorter};
@@ -525,8 +525,7 @@ impl<C: Communicator> Domain<C> {
         self.scratch_keys.clear();
         self.scratch_keys.resize(n - n_owned, 0);
         for (k, &old) in order.iter().enumerate() {
-            let new = if k < n_low { k } else { n_owned + k };
-            self.scratch_keys[old as usize] = new as u64;
+            self.scratch_keys[old as usize] = halo_slot(k, n_low, n_owned) as u64;
         }
         n_low
     }

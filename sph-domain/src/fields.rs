@@ -111,3 +111,21 @@ pub fn halo_placement(n_owned: usize, order: &[u32], n_low: usize, perm: &mut Ve
     perm.extend(0..n_owned as u32);
     perm.extend(order[n_low..].iter().map(halo));
 }
+
+/// The new index, under [`halo_placement`], of the halo at position `k`
+/// of `order`: the first `n_low` go in front of the owned block, the
+/// others after it.
+///
+/// ```
+/// // Two owned particles, three halos of which two go in front.
+/// let slots: Vec<usize> = (0..3).map(|k| sph_domain::halo_slot(k, 2, 2)).collect();
+/// assert_eq!(slots, [0, 1, 4]);
+/// ```
+#[inline]
+pub fn halo_slot(k: usize, n_low: usize, n_owned: usize) -> usize {
+    if k < n_low {
+        k
+    } else {
+        n_owned + k
+    }
+}

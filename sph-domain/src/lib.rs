@@ -55,6 +55,6 @@ mod points;
 
 pub use domain::{Domain, DomainConfig, SyncStats};
 pub use error::DomainError;
-pub use fields::{halo_placement, ParticleFields};
+pub use fields::{halo_placement, halo_slot, ParticleFields};
 pub use global_tree::{Assignment, GlobalTree, KEY_END};
 pub use points::Points;

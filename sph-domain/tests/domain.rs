@@ -218,3 +218,25 @@ proptest! {
         run(ranks, 600, seed, b);
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// `halo_slot` names, halo by halo, the slot `halo_placement`'s
+    /// gather puts it in, and the owned block keeps its order.
+    #[test]
+    fn halo_slots_are_the_placement(n_owned in 0usize..20, halos in proptest::collection::vec(any::<u32>(), 0..20), low in any::<prop::sample::Index>()) {
+        let mut order: Vec<u32> = (0..halos.len() as u32).collect();
+        order.sort_by_key(|&k| halos[k as usize]);
+        let n_low = if order.is_empty() { 0 } else { low.index(order.len() + 1) };
+        let mut perm = Vec::new();
+        sph_domain::halo_placement(n_owned, &order, n_low, &mut perm);
+        prop_assert_eq!(perm.len(), n_owned + order.len());
+        for (k, &old) in order.iter().enumerate() {
+            prop_assert_eq!(perm[sph_domain::halo_slot(k, n_low, n_owned)], n_owned as u32 + old);
+        }
+        for i in 0..n_owned {
+            prop_assert_eq!(perm[n_low + i], i as u32);
+        }
+    }
+}
