@@ -237,6 +237,25 @@ fn a_scheme_preset_is_its_options() {
     assert_ne!(overridden, preset);
 }
 
+#[test]
+fn the_viscosity_form_is_an_option_and_recorded() {
+    let ve = tiny_sedov("form-ve", &["--scheme", "ve"]);
+    let same = tiny_sedov(
+        "form-ve-sph-exa",
+        &["--scheme", "ve", "--av-form", "sph-exa"],
+    );
+    let paper = tiny_sedov("form-ve-paper", &["--scheme", "ve", "--av-form", "paper"]);
+    assert_eq!(ve, same, "--av-form sph-exa is ve's own form");
+    assert_ne!(ve, paper, "--av-form paper changed nothing");
+    // (tiny_sedov's folder, not emptied again by scratch())
+    let config =
+        PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli-form-ve-paper/out/config.toml");
+    let config = std::fs::read_to_string(config).expect("config.toml");
+    assert!(config.contains("av-form = \"paper\""), "{config}");
+    let e = refused(&["sedov", "--av-form", "beta"]);
+    assert_mentions(&e, &["beta", "paper", "sph-exa"]);
+}
+
 /// A build without MPI refuses runs on more than one rank, in `bench
 /// --ranks` and when an MPI launcher started it, instead of running the
 /// whole problem once per rank into the same files.

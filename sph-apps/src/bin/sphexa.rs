@@ -13,7 +13,7 @@ use sph_apps::watch::{Bounds, Watch, GRAVITY_MOMENTUM_BOUND};
 use sph_apps::{AppError, Simulation};
 use sph_comm::Communicator;
 use sph_core::PRESETS;
-use sph_core::{Gradients, HydroConfig, Volume};
+use sph_core::{AvForm, Gradients, HydroConfig, Volume};
 use sph_kernels::{FastKernel, KernelChoice};
 use sph_tree::Curve;
 use std::ffi::OsString;
@@ -202,6 +202,17 @@ enum VolumeArg {
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq)]
+enum AvFormArg {
+    /// The seed paper's: Pi_ij = -alpha_ij/2 (c_i + c_j - 3 w_ij) w_ij, and
+    /// the Courant signal velocity c_i + c_j - 3 min(w_ij, 0).
+    Paper,
+    /// SPH-EXA's `ve`: Pi_ij = -(alpha_ij/2 (c_i + c_j) - 2 w_ij) w_ij (its
+    /// beta = 2 term not scaled by alpha), and the Courant signal velocity
+    /// (c_i + c_j)/2 - 2 w_ij.
+    SphExa,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq)]
 enum SmoothingArg {
     /// Follows the neighbour count every step.
     Adaptive,
@@ -345,6 +356,11 @@ struct RunArgs {
     /// see `sphexa cases`).
     #[arg(long, value_enum)]
     av_cleaning: Option<Switch>,
+    /// Form of the artificial viscosity and of the Courant signal velocity
+    /// that goes with it (default: the scheme's: `sph-exa` in `ve` and
+    /// `ve-ac`, `paper` in the other presets).
+    #[arg(long, value_enum)]
+    av_form: Option<AvFormArg>,
     /// Self-gravity: opening angle theta of the tree, a positive number
     /// (cases with gravity only).
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true,
@@ -962,6 +978,9 @@ fn scheme_options(s: &Scheme, physics: Physics) -> String {
     if s.av_cleaning {
         text += " --av-cleaning on";
     }
+    if s.av_form != AvForm::Paper {
+        text += &format!(" --av-form {}", av_form_name(s.av_form));
+    }
     if let Some(soft) = physics.softening {
         text += &format!(" --softening {soft} (self-gravity)");
     }
@@ -969,6 +988,14 @@ fn scheme_options(s: &Scheme, physics: Physics) -> String {
         text += &format!(" --courant {k}");
     }
     text
+}
+
+/// The `--av-form` value of `f`.
+fn av_form_name(f: AvForm) -> &'static str {
+    match f {
+        AvForm::Paper => "paper",
+        AvForm::SphExa => "sph-exa",
+    }
 }
 
 /// The `--volume` value of `v`.
@@ -1041,6 +1068,10 @@ fn scheme_overrides(a: &RunArgs) -> Result<SchemeOverrides, AppError> {
             VolumeArg::PressureEnergy => Volume::PressureEnergy,
         }),
         av_cleaning: a.av_cleaning.map(|s| s == Switch::On),
+        av_form: a.av_form.map(|f| match f {
+            AvFormArg::Paper => AvForm::Paper,
+            AvFormArg::SphExa => AvForm::SphExa,
+        }),
         softening: a.softening,
         courant: a.courant,
     })
@@ -1307,6 +1338,7 @@ fn resolved_config(
     );
     set("volume", Value::String(volume_name(s.volume).into()));
     set("av-cleaning", on(s.av_cleaning));
+    set("av-form", Value::String(av_form_name(s.av_form).into()));
     set("theta", Value::Float(a.theta));
     if let Some(g) = config.gravity {
         set("softening", Value::Float(g.softening));

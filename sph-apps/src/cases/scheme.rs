@@ -3,7 +3,7 @@
 //! are written into a [`HydroConfig`].
 
 pub use sph_core::Scheme;
-use sph_core::{Eos, Gradients, HydroConfig, Volume};
+use sph_core::{AvForm, Eos, Gradients, HydroConfig, Volume};
 use sph_gravity::GravityParams;
 
 /// The physics of a case besides its scheme: the equation of state,
@@ -34,7 +34,7 @@ impl Physics {
 /// What a run changes in a case's scheme (the command line's `--scheme`,
 /// `--gradients`, `--grad-h`, `--alpha`, `--av-switches`,
 /// `--conductivity`, `--artificial-stress`, `--smoothing-length`,
-/// `--softening`, `--courant`); `None` keeps the case's choice. The
+/// `--volume`, `--av-cleaning`, `--av-form`, `--softening`, `--courant`); `None` keeps the case's choice. The
 /// default overrides nothing.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct SchemeOverrides {
@@ -59,6 +59,8 @@ pub struct SchemeOverrides {
     pub volume: Option<Volume>,
     /// SPH-EXA's AV cleaning.
     pub av_cleaning: Option<bool>,
+    /// Form of the viscosity and of the Courant signal velocity.
+    pub av_form: Option<AvForm>,
     /// Self-gravity softening scale (cases with self-gravity).
     pub softening: Option<f64>,
     /// Courant factor (over the case's, see [`Physics::courant`]).
@@ -95,6 +97,9 @@ impl SchemeOverrides {
         }
         if let Some(c) = self.av_cleaning {
             s.av_cleaning = c;
+        }
+        if let Some(f) = self.av_form {
+            s.av_form = f;
         }
         s
     }
