@@ -314,20 +314,18 @@ impl<'a> From<HydroState<'a>> for FlowState<'a> {
 }
 
 /// Weight of the pair term `d = x_i - x_j` before the final factors, for
-/// a lane of targets at squared distances `r2` (`r2 > 0`): with IAD `W`
-/// shape (the gradient is `-C d W`; from `r2` without a root), plain
-/// `S'(v) / r` (the gradient is `K/h^4 S'(v) d / r`). Lanes at `r = 0`
-/// (the target itself) get 0.
+/// a lane of targets at squared distances `r2`: with IAD `W` shape (the
+/// gradient is `-C d W`), plain `S'(v) / r` (the gradient is
+/// `K/h^4 S'(v) d / r`; lanes at `r = 0`, the target itself, get 0); both
+/// from `r2` without a root.
 #[inline(always)]
 fn pair_weight<K: Kernel, const IAD: bool>(kernel: &K, r2: F64s, inv_h: F64s) -> F64s {
     if IAD {
         kernel.shape_sq_lanes(r2 * (inv_h * inv_h))
     } else {
-        let r = r2.sqrt();
-        let zero = F64s::splat(0.0);
-        let r_safe = F64s::select_positive(r, r, F64s::splat(1.0));
-        let w = kernel.shape_and_derivative_lanes(r * inv_h).1 / r_safe;
-        F64s::select_positive(r, w, zero)
+        // S'(v) / r = (S'(v) / v) / h, from r^2 without a root or a division.
+        let w = kernel.derivative_over_v_sq_lanes(r2 * (inv_h * inv_h)) * inv_h;
+        F64s::select_positive(r2, w, F64s::splat(0.0))
     }
 }
 

@@ -122,6 +122,16 @@ impl Kernel for FastKernel {
     }
 
     #[inline]
+    fn derivative_over_v_sq(&self, v2: f64) -> f64 {
+        either!(self, k => k.derivative_over_v_sq(v2))
+    }
+
+    #[inline(always)]
+    fn derivative_over_v_sq_lanes(&self, v2: F64s) -> F64s {
+        either!(self, k => k.derivative_over_v_sq_lanes(v2))
+    }
+
+    #[inline]
     fn shape_sq(&self, v2: f64) -> f64 {
         either!(self, k => k.shape_sq(v2))
     }

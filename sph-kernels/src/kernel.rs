@@ -76,6 +76,16 @@ pub trait Kernel: Send + Sync {
         (w, v * dw)
     }
 
+    /// `w'(v) / v` from the squared argument `v2 = v^2` (`v > 0`): a
+    /// kernel gradient is `K/h^5 (w'(v) / v) (x_i - x_j)`. The default
+    /// takes the root and divides (not finite at `v = 0`, where callers
+    /// mask the pair); a polynomial in `v^2` needs neither.
+    #[inline]
+    fn derivative_over_v_sq(&self, v2: f64) -> f64 {
+        let v = v2.sqrt();
+        self.shape_derivative(v) / v
+    }
+
     /// [`shape_sq`](Kernel::shape_sq) for a lane of squared arguments;
     /// lane `l` equals `shape_sq(v2[l])` bit for bit.
     #[inline]
@@ -91,6 +101,14 @@ pub trait Kernel: Send + Sync {
         let v = v2.sqrt();
         let (w, dw) = self.shape_and_derivative_lanes(v);
         (w, v * dw)
+    }
+
+    /// [`derivative_over_v_sq`](Kernel::derivative_over_v_sq) for a lane
+    /// of squared arguments; lane `l` equals its scalar form bit for bit.
+    #[inline]
+    fn derivative_over_v_sq_lanes(&self, v2: F64s) -> F64s {
+        let v = v2.sqrt();
+        self.shape_and_derivative_lanes(v).1 / v
     }
 
     /// Support radius in units of `h` (2.0 for every built-in kernel).
@@ -155,6 +173,14 @@ macro_rules! forward_kernel {
             #[inline]
             fn shape_and_derivative_lanes(&self, v: F64s) -> (F64s, F64s) {
                 (**self).shape_and_derivative_lanes(v)
+            }
+            #[inline]
+            fn derivative_over_v_sq(&self, v2: f64) -> f64 {
+                (**self).derivative_over_v_sq(v2)
+            }
+            #[inline]
+            fn derivative_over_v_sq_lanes(&self, v2: F64s) -> F64s {
+                (**self).derivative_over_v_sq_lanes(v2)
             }
             #[inline]
             fn shape_sq(&self, v2: f64) -> f64 {

@@ -330,6 +330,40 @@ impl Kernel for Polynomial {
     }
 
     #[inline]
+    fn derivative_over_v_sq(&self, v2: f64) -> f64 {
+        match self.variable {
+            // w' = v P'(t) (chain factor in dw), so w' / v = P'(t).
+            FitVariable::Square => {
+                let dw = horner(&self.dw, self.terms - 1, self.scale * v2 - 1.0);
+                if v2 < self.support * self.support {
+                    dw
+                } else {
+                    0.0
+                }
+            }
+            FitVariable::Radius => {
+                let v = v2.sqrt();
+                self.shape_derivative(v) / v
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn derivative_over_v_sq_lanes(&self, v2: F64s) -> F64s {
+        match self.variable {
+            FitVariable::Square => {
+                let dw = horner_lanes(&self.dw, self.terms - 1, v2 * self.scale - 1.0);
+                v2.lt(F64s::splat(self.support * self.support))
+                    .select(dw, F64s::splat(0.0))
+            }
+            FitVariable::Radius => {
+                let v = v2.sqrt();
+                self.shape_and_derivative_lanes(v).1 / v
+            }
+        }
+    }
+
+    #[inline]
     fn shape_sq(&self, v2: f64) -> f64 {
         match self.variable {
             FitVariable::Square => {

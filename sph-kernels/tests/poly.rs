@@ -120,6 +120,10 @@ proptest! {
             prop_assert!((w_sq_only[l] - w_root[l]).abs() <= tol * sw, "{choice} v = {}: {} vs {}", v[l], w_sq_only[l], w_root[l]);
             prop_assert!((w_sq[l] - w_r[l]).abs() <= tol * sw, "{choice} v = {}", v[l]);
             prop_assert!((vdw_sq[l] - v[l] * dw_r[l]).abs() <= tol * 2.0 * sdw, "{choice} v = {}: {} vs {}", v[l], vdw_sq[l], v[l] * dw_r[l]);
+            if v[l] > 1e-3 {
+                let d = fast.derivative_over_v_sq_lanes(v2).to_array()[l];
+                prop_assert!((d * v[l] - dw_r[l]).abs() <= tol * 2.0 * sdw, "{choice} v = {}: {} vs {}", v[l], d * v[l], dw_r[l]);
+            }
             if v[l] >= 2.0 {
                 prop_assert_eq!(w_sq_only[l], 0.0);
                 prop_assert_eq!(vdw_sq[l], 0.0);

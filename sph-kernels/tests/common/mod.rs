@@ -64,6 +64,12 @@ pub fn lanes_match_scalar(k: &dyn Kernel, v: [f64; LANES]) -> Result<(), TestCas
         prop_assert_eq!(w[l].to_bits(), k.shape_sq(v2).to_bits(), "v2 = {}", v2);
         prop_assert_eq!(w2[l].to_bits(), sw.to_bits(), "v2 = {}", v2);
         prop_assert_eq!(vdw[l].to_bits(), svdw.to_bits(), "v2 = {}", v2);
+        prop_assert_eq!(
+            k.derivative_over_v_sq_lanes(F64s::splat(v2)).to_array()[0].to_bits(),
+            k.derivative_over_v_sq(v2).to_bits(),
+            "v2 = {}",
+            v2
+        );
     }
     Ok(())
 }
