@@ -61,6 +61,20 @@ pub trait Kernel: Send + Sync {
     /// has before any square root). The default takes the root; a
     /// polynomial in `v^2` ([`Polynomial`](crate::Polynomial)) evaluates
     /// without it. Lane forms: [`shape_sq_lanes`](Kernel::shape_sq_lanes).
+    ///
+    /// ```
+    /// use sph_kernels::{FastKernel, Kernel, Sinc};
+    /// let k = FastKernel::new(&Sinc::new(6.0)?)?;
+    /// // A pair at r = 0.007 with h = 0.01: v^2 = r^2 / h^2, no root taken.
+    /// let (r2, h) = (0.007f64 * 0.007, 0.01);
+    /// let (v2, v) = (r2 / (h * h), r2.sqrt() / h);
+    /// assert!((k.shape_sq(v2) - k.shape(v)).abs() < 1e-13);
+    /// let (w, vdw) = k.shape_and_v_derivative_sq(v2);
+    /// assert!((w - k.shape(v)).abs() < 1e-13);
+    /// assert!((vdw - v * k.shape_derivative(v)).abs() < 1e-13);
+    /// assert!((k.derivative_over_v_sq(v2) * v - k.shape_derivative(v)).abs() < 1e-13);
+    /// # Ok::<(), sph_kernels::KernelError>(())
+    /// ```
     #[inline]
     fn shape_sq(&self, v2: f64) -> f64 {
         self.shape(v2.sqrt())
