@@ -181,7 +181,7 @@ impl Polynomial {
     fn t(&self, v: f64) -> f64 {
         match self.variable {
             FitVariable::Radius => self.scale * v - 1.0,
-            FitVariable::Square => self.scale * (v * v) - 1.0,
+            FitVariable::Square => self.t_sq(v * v),
         }
     }
 
@@ -189,8 +189,26 @@ impl Polynomial {
     fn t_lanes(&self, v: F64s) -> F64s {
         match self.variable {
             FitVariable::Radius => v * self.scale - 1.0,
-            FitVariable::Square => (v * v) * self.scale - 1.0,
+            FitVariable::Square => self.t_sq_lanes(v * v),
         }
+    }
+
+    /// `t` for `v^2` (a fit in `v^2` only).
+    #[inline(always)]
+    fn t_sq(&self, v2: f64) -> f64 {
+        self.scale * v2 - 1.0
+    }
+
+    #[inline(always)]
+    fn t_sq_lanes(&self, v2: F64s) -> F64s {
+        v2 * self.scale - 1.0
+    }
+
+    /// `value` where `v^2` is inside the support, else 0.
+    #[inline(always)]
+    fn inside_sq(&self, v2: F64s, value: F64s) -> F64s {
+        v2.lt(F64s::splat(self.support * self.support))
+            .select(value, F64s::splat(0.0))
     }
 }
 
@@ -334,7 +352,7 @@ impl Kernel for Polynomial {
         match self.variable {
             // w' = v P'(t) (chain factor in dw), so w' / v = P'(t).
             FitVariable::Square => {
-                let dw = horner(&self.dw, self.terms - 1, self.scale * v2 - 1.0);
+                let dw = horner(&self.dw, self.terms - 1, self.t_sq(v2));
                 if v2 < self.support * self.support {
                     dw
                 } else {
@@ -352,9 +370,8 @@ impl Kernel for Polynomial {
     fn derivative_over_v_sq_lanes(&self, v2: F64s) -> F64s {
         match self.variable {
             FitVariable::Square => {
-                let dw = horner_lanes(&self.dw, self.terms - 1, v2 * self.scale - 1.0);
-                v2.lt(F64s::splat(self.support * self.support))
-                    .select(dw, F64s::splat(0.0))
+                let dw = horner_lanes(&self.dw, self.terms - 1, self.t_sq_lanes(v2));
+                self.inside_sq(v2, dw)
             }
             FitVariable::Radius => {
                 let v = v2.sqrt();
@@ -367,7 +384,7 @@ impl Kernel for Polynomial {
     fn shape_sq(&self, v2: f64) -> f64 {
         match self.variable {
             FitVariable::Square => {
-                let w = horner(&self.w, self.terms, self.scale * v2 - 1.0);
+                let w = horner(&self.w, self.terms, self.t_sq(v2));
                 if v2 < self.support * self.support {
                     w
                 } else {
@@ -382,7 +399,7 @@ impl Kernel for Polynomial {
     fn shape_and_v_derivative_sq(&self, v2: f64) -> (f64, f64) {
         match self.variable {
             FitVariable::Square => {
-                let t = self.scale * v2 - 1.0;
+                let t = self.t_sq(v2);
                 let w = horner(&self.w, self.terms, t);
                 let vdw = horner(&self.dw, self.terms - 1, t) * v2;
                 if v2 < self.support * self.support {
@@ -403,9 +420,8 @@ impl Kernel for Polynomial {
     fn shape_sq_lanes(&self, v2: F64s) -> F64s {
         match self.variable {
             FitVariable::Square => {
-                let w = horner_lanes(&self.w, self.terms, v2 * self.scale - 1.0);
-                v2.lt(F64s::splat(self.support * self.support))
-                    .select(w, F64s::splat(0.0))
+                let w = horner_lanes(&self.w, self.terms, self.t_sq_lanes(v2));
+                self.inside_sq(v2, w)
             }
             FitVariable::Radius => self.shape_lanes(v2.sqrt()),
         }
@@ -416,12 +432,10 @@ impl Kernel for Polynomial {
         match self.variable {
             // w' = v P'(t) dw-coefficients, so v w' = v^2 (...): no root.
             FitVariable::Square => {
-                let t = v2 * self.scale - 1.0;
+                let t = self.t_sq_lanes(v2);
                 let w = horner_lanes(&self.w, self.terms, t);
                 let vdw = horner_lanes(&self.dw, self.terms - 1, t) * v2;
-                let inside = v2.lt(F64s::splat(self.support * self.support));
-                let zero = F64s::splat(0.0);
-                (inside.select(w, zero), inside.select(vdw, zero))
+                (self.inside_sq(v2, w), self.inside_sq(v2, vdw))
             }
             FitVariable::Radius => {
                 let v = v2.sqrt();
