@@ -200,6 +200,16 @@ fn unknown_scheme_is_named_with_the_presets() {
     assert_mentions(&e, &words);
 }
 
+#[test]
+fn run_help_names_every_preset() {
+    let out = sphexa(&["run", "--help"]);
+    assert!(out.status.success());
+    let help = String::from_utf8_lossy(&out.stdout);
+    for (name, _, _) in sph_core::PRESETS {
+        assert!(help.contains(&format!("`{name}`")), "--help lacks {name}");
+    }
+}
+
 /// `conserved.csv` of a tiny Sedov run with `extra` options.
 fn tiny_sedov(name: &str, extra: &[&str]) -> String {
     let dir = scratch(name).join("out");

@@ -295,7 +295,9 @@ struct RunArgs {
     /// (the seed paper's eqs. 1-5: IAD, grad-h, constant alpha = 1), `std`
     /// (SPH-EXA's std: as paper without grad-h), `ve` (SPH-EXA's default:
     /// volume elements, grad-h, IAD, its switches), `ve-ac` (ve without
-    /// grad-h, with conductivity 1), `shear` (the paper's with switches and
+    /// grad-h, with conductivity 1), `best` (ve-ac with the paper's
+    /// viscosity and switches up to alpha 0.5: the lowest Sedov error per
+    /// second), `shear` (the paper's with switches and
     /// AV cleaning), `contact` (pressure-energy volumes,
     /// kernel gradients, grad-h, alpha = 1), `noh` (kernel gradients, grad-h,
     /// switches up to alpha 0.7), `evrard` (kernel gradients, no grad-h,
