@@ -279,9 +279,9 @@ impl Scheme {
     /// with viscosity switches (alpha in [0.05, 1]) and SPH-EXA's AV
     /// cleaning ([`AvCleaning`](crate::momentum::AvCleaning)), which
     /// leaves a shear layer's linear velocity profile undamped.
-    /// Kelvin-Helmholtz M(1.5) (reference 0.1479): 0.074 at 32^2 x 8 and
-    /// 0.120 at 64^2 x 8; `ve`: 0.017 and 0.046, `ve` with cleaning 0.065
-    /// and 0.112.
+    /// Kelvin-Helmholtz M(1.5) (reference 0.1479): 0.066 at 32^2 x 8 and
+    /// 0.117 at 64^2 x 8; `ve`: 0.017 and 0.046, `ve` with cleaning 0.053
+    /// and 0.109.
     pub const SHEAR: Scheme = Scheme {
         viscosity: Viscosity::Switched(AvSwitchParams::DEFAULT),
         av_cleaning: true,
