@@ -3,10 +3,10 @@
 //! viscosity switches and SPH-EXA's AV cleaning): the seeded mode must grow.
 //!
 //! Measured M(1.5) (2 threads; seed 0.01, McNally's converged reference
-//! 0.1479): `shear` 0.074 at 32^2 x 8 and 0.120 at 64^2 x 8; `ve` 0.017
-//! and 0.046; `ve` with the cleaning 0.065 and 0.112; the paper's scheme
+//! 0.1479): `shear` 0.066 at 32^2 x 8 and 0.117 at 64^2 x 8; `ve` 0.017
+//! and 0.046; `ve` with the cleaning 0.053 and 0.109; the paper's scheme
 //! with switches but no cleaning 0.035 at 32^2. At 32^2 the mode dips to
-//! 0.0073 near t = 0.4 while the seed reorganises, then grows: 0.0246 at
+//! 0.0069 near t = 0.45 while the seed reorganises, then grows: 0.0240 at
 //! t = 1.0. The checks: M(1.5) above 0.05 (5x the seed; no scheme without
 //! the cleaning reaches it at 32^2, and the null solution keeps the seed's
 //! 0.01), M rising over the last third of the run, energy and momentum
