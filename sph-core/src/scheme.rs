@@ -131,8 +131,9 @@ pub struct Scheme {
     /// spacing).
     #[serde(default)]
     pub fixed_h: bool,
-    /// SPH-EXA's AV cleaning: the viscosity sees the velocity jump left
-    /// after a limited linear reconstruction from both sides
+    /// AV cleaning after SPH-EXA's: the viscosity of an approaching pair
+    /// sees the velocity jump left after a limited linear reconstruction
+    /// from both sides
     /// ([`AvCleaning`](crate::momentum::AvCleaning)), so shear and smooth
     /// compression are not damped; needs the symmetric velocity gradient
     /// (six fields, exchanged to the halos).
@@ -176,7 +177,7 @@ pub const PRESETS: [(&str, Scheme, &str); 9] = [
     (
         "shear",
         Scheme::SHEAR,
-        "shear layers: the paper's IAD and grad-h, viscosity switches in [0.05, 1], SPH-EXA's AV cleaning (the Kelvin-Helmholtz case's)",
+        "shear layers: the paper's IAD and grad-h, viscosity switches in [0.05, 1], AV cleaning after SPH-EXA's (the Kelvin-Helmholtz case's)",
     ),
     (
         "contact",

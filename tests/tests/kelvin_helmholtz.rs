@@ -1,6 +1,6 @@
 //! Kelvin-Helmholtz instability (McNally et al. 2012 set-up), 32 x 32 x 8
 //! particles, to t = 1.5, with the case's scheme (`shear`: the paper's with
-//! viscosity switches and SPH-EXA's AV cleaning): the seeded mode must grow.
+//! viscosity switches and the AV cleaning): the seeded mode must grow.
 //!
 //! Measured M(1.5) (2 threads; seed 0.01, McNally's converged reference
 //! 0.1479): `shear` 0.066 at 32^2 x 8 and 0.117 at 64^2 x 8; `ve` 0.017

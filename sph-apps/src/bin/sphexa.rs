@@ -351,10 +351,10 @@ struct RunArgs {
     /// Particle volumes (default: the case's, see `sphexa cases`).
     #[arg(long, value_enum)]
     volume: Option<VolumeArg>,
-    /// SPH-EXA's AV cleaning: the viscosity acts on the velocity jump left
-    /// after a limited linear reconstruction from both sides of a pair, so
-    /// shear layers and smooth flows keep their kinetic energy while shocks
-    /// keep their full viscosity. Default: the case's (kelvin-helmholtz:
+    /// AV cleaning after SPH-EXA's: the viscosity of an approaching pair acts
+    /// on the velocity jump left after a limited linear reconstruction from
+    /// both sides, so shear layers and smooth flows keep their kinetic
+    /// energy while shocks keep their full viscosity. Default: the case's (kelvin-helmholtz:
     /// see `sphexa cases`).
     #[arg(long, value_enum)]
     av_cleaning: Option<Switch>,

@@ -57,7 +57,7 @@ pub struct SchemeOverrides {
     pub fixed_h: Option<bool>,
     /// Particle volumes.
     pub volume: Option<Volume>,
-    /// SPH-EXA's AV cleaning.
+    /// AV cleaning (after SPH-EXA's; approaching pairs only).
     pub av_cleaning: Option<bool>,
     /// Form of the viscosity and of the Courant signal velocity.
     pub av_form: Option<AvForm>,
