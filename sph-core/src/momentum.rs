@@ -265,6 +265,10 @@ pub struct MomentumScheme<'a> {
 /// A = (r . G_i r) / (r . G_j r),   phi_ij = 1/2 damp(eta) clamp(4 A / (1 + A)^2, 0, 1)
 /// ```
 ///
+/// evaluated as `phi_ij (q_i + q_j) = damp 2 q_i q_j / (q_i + q_j)` where
+/// `q_i = r . G_i r` and `q_j` agree in sign, else 0 (the harmonic mean of
+/// the two reconstructions: one division, and the same bits for `j, i`).
+///
 /// (`damp = exp(-(5 (eta - eta_c))^2)` for pairs closer than
 /// `eta = min(r/h_i, r/h_j) < eta_c`, else 1; `eta_c` the lattice spacing
 /// over h for the target neighbour count). A linear velocity field
@@ -845,10 +849,13 @@ fn cleaning_correction(
         gd[0] * d[0] + gd[1] * d[1] + gd[2] * d[2]
     };
     let (qi, qj) = (quad(gi), quad(gj));
-    let nonzero = qj.abs().gt(zero);
-    let a = nonzero.select(qi / nonzero.select(qj, F64s::splat(1.0)), zero);
-    let a1 = 1.0 + a;
-    let limiter = (4.0 * a / (a1 * a1)).max(zero).min(F64s::splat(1.0));
+    // phi (qi + qj) with phi = clamp(4 A / (1 + A)^2, 0, 1) / 2, A = qi / qj,
+    // is 2 qi qj / (qi + qj), the harmonic mean of the two sides'
+    // reconstructions, where they agree in sign (AM-GM keeps 4 A / (1 + A)^2
+    // within (0, 1] there), and 0 where they do not: one division, no clamp.
+    let prod = qi * qj;
+    let agree = prod.gt(zero);
+    let mean = agree.select(2.0 * prod / agree.select(qi + qj, F64s::splat(1.0)), zero);
     let mut damp = F64s::splat(1.0);
     if eta.min_lane() < cl.eta_crit {
         // Pairs closer than the spacing (rare): damped toward r = 0.
@@ -862,7 +869,7 @@ fn cleaning_correction(
             }
         }));
     }
-    -(0.5 * damp * limiter) * (qi + qj)
+    -(damp * mean)
 }
 
 /// SPH-EXA's momentum weights `(a_ij, b_ij)` of pair `i, j` from the
