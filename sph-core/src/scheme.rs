@@ -277,8 +277,8 @@ impl Scheme {
     };
 
     /// The `kelvin-helmholtz` case's scheme: the paper's (IAD, grad-h)
-    /// with viscosity switches (alpha in [0.05, 1]) and SPH-EXA's AV
-    /// cleaning ([`AvCleaning`](crate::momentum::AvCleaning)), which
+    /// with viscosity switches (alpha in [0.05, 1]) and the AV cleaning
+    /// after SPH-EXA's ([`AvCleaning`](crate::momentum::AvCleaning)), which
     /// leaves a shear layer's linear velocity profile undamped.
     /// Kelvin-Helmholtz M(1.5) (reference 0.1479): 0.066 at 32^2 x 8 and
     /// 0.117 at 64^2 x 8; `ve`: 0.017 and 0.046, `ve` with cleaning 0.053
