@@ -9,8 +9,10 @@
 //!
 //! with `W'(r, h) = dW/dr <= 0`, so heat flows from hot to cold. The pair
 //! term is antisymmetric: `sum_i m_i du_i/dt` is unchanged (total energy
-//! conserved to round-off). A separate pass over the lists, run only when
-//! the conductivity is on, after the momentum stage.
+//! conserved to round-off). The solver adds it inside the momentum pass
+//! ([`Conductivity`] in [`MomentumScheme`](crate::momentum::MomentumScheme):
+//! the pairs and their partners' data are already at hand there);
+//! [`conduction`] is the same sum as a pass of its own.
 
 use crate::density::Positions;
 use crate::pair_loop::{F64s, Group, PairLoop, PairStage};
@@ -74,63 +76,118 @@ pub fn conduction<K: Kernel>(
     let stage = Conduction {
         kernel,
         norm: kernel.norm(),
-        alpha_u,
         h: pos.h,
         m: pos.m,
         rho,
-        p,
-        u,
+        c: Conductivity { alpha_u, p, u },
     };
     driver.run(&stage, [&mut du[nl.targets()]]);
 }
 
-/// The conduction sums: partners outside both supports (and the target
-/// itself) add exact zeros.
+/// The conductivity of a momentum pass: `alpha_u` and the pressure and
+/// internal energy of every particle the lists reach.
+#[derive(Debug, Clone, Copy)]
+pub struct Conductivity<'a> {
+    /// `alpha_u`.
+    pub alpha_u: f64,
+    /// Pressure.
+    pub p: &'a [f64],
+    /// Internal energy per mass.
+    pub u: &'a [f64],
+}
+
+/// A group of targets' side of the conduction sum: `K/h_i^4`, `rho_i`,
+/// `P_i`, `u_i`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ConductionTarget {
+    pub(crate) ki4: F64s,
+    pub(crate) rho: F64s,
+    pub(crate) p: F64s,
+    pub(crate) u: F64s,
+}
+
+impl ConductionTarget {
+    /// The targets of `g` with `1/h` = `inv_hi`.
+    #[inline(always)]
+    pub(crate) fn load(
+        g: &Group,
+        norm: f64,
+        inv_hi: F64s,
+        rho: &[f64],
+        c: &Conductivity<'_>,
+    ) -> Self {
+        let ih2 = inv_hi * inv_hi;
+        Self {
+            ki4: norm * (ih2 * ih2),
+            rho: g.load(rho),
+            p: g.load(c.p),
+            u: g.load(c.u),
+        }
+    }
+
+    /// `dW = (K/h_i^4 w'(r/h_i) + K/h_j^4 w'(r/h_j)) / 2` at the squared
+    /// distance `r2` (zero beyond both supports and at `r = 0`).
+    #[inline(always)]
+    pub(crate) fn mean_derivative<K: Kernel>(
+        &self,
+        kernel: &K,
+        norm: f64,
+        r2: F64s,
+        inv_hi: F64s,
+        inv_hj: f64,
+    ) -> F64s {
+        let r = r2.sqrt();
+        let kj4 = norm * inv_hj.powi(4);
+        let wi = kernel.shape_and_derivative_lanes(r * inv_hi).1;
+        let wj = kernel.shape_and_derivative_lanes(r * inv_hj).1;
+        0.5 * (self.ki4 * wi + kj4 * wj)
+    }
+
+    /// Partner `j`'s term of the sum (before the factor `alpha_u`),
+    /// `m_j v_u (u_i - u_j) / rho_ij dW`, for the mean kernel derivative
+    /// `dW` ([`mean_derivative`](Self::mean_derivative)). A zero mass or
+    /// `dW` (partners beyond both supports) gives an exact zero.
+    #[inline(always)]
+    pub(crate) fn term(&self, m_j: F64s, dw: F64s, rho_j: f64, p_j: f64, u_j: f64) -> F64s {
+        let rho_ij = 0.5 * (self.rho + rho_j);
+        let v_u = ((self.p - p_j).abs() / rho_ij).sqrt();
+        m_j * v_u * (self.u - u_j) / rho_ij * dw
+    }
+}
+
+/// The conduction sums as a pass of their own.
 struct Conduction<'a, K> {
     kernel: &'a K,
     norm: f64,
-    alpha_u: f64,
     h: &'a [f64],
     m: &'a [f64],
     rho: &'a [f64],
-    p: &'a [f64],
-    u: &'a [f64],
+    c: Conductivity<'a>,
 }
 
-/// A group's `1/h`, `K/h^4`, `rho`, `P`, `u` and the sum.
-type ConductionSums = (F64s, F64s, F64s, F64s, F64s, F64s);
-
 impl<K: Kernel> PairStage for Conduction<'_, K> {
-    type Sums = ConductionSums;
+    type Sums = (F64s, ConductionTarget, F64s);
     type Out<'o> = [&'o mut [f64]; 1];
     type Stats = ();
 
     #[inline(always)]
-    fn start(&self, g: &Group) -> ConductionSums {
+    fn start(&self, g: &Group) -> Self::Sums {
         let inv_hi = 1.0 / g.load(self.h);
-        let ih2 = inv_hi * inv_hi;
-        let ki4 = self.norm * (ih2 * ih2);
-        let (rho_i, p_i, u_i) = (g.load(self.rho), g.load(self.p), g.load(self.u));
-        (inv_hi, ki4, rho_i, p_i, u_i, F64s::splat(0.0))
+        let target = ConductionTarget::load(g, self.norm, inv_hi, self.rho, &self.c);
+        (inv_hi, target, F64s::splat(0.0))
     }
 
     #[inline(always)]
-    fn pair(&self, t: &mut ConductionSums, j: usize, _: [F64s; 3], r2: F64s) {
-        let (inv_hi, ki4, rho_i, p_i, u_i, sum) = t;
-        let r = r2.sqrt();
-        let inv_hj = 1.0 / self.h[j];
-        let kj4 = self.norm * inv_hj.powi(4);
-        let wi = self.kernel.shape_and_derivative_lanes(r * *inv_hi).1;
-        let wj = self.kernel.shape_and_derivative_lanes(r * inv_hj).1;
-        let dw = 0.5 * (*ki4 * wi + kj4 * wj);
-        let rho_ij = 0.5 * (*rho_i + self.rho[j]);
-        let v_u = ((*p_i - self.p[j]).abs() / rho_ij).sqrt();
-        *sum += self.m[j] * v_u * (*u_i - self.u[j]) / rho_ij * dw;
+    fn pair(&self, (inv_hi, target, sum): &mut Self::Sums, j: usize, _: [F64s; 3], r2: F64s) {
+        let (c, inv_hj) = (&self.c, 1.0 / self.h[j]);
+        let dw = target.mean_derivative(self.kernel, self.norm, r2, *inv_hi, inv_hj);
+        let m_j = F64s::splat(self.m[j]);
+        *sum += target.term(m_j, dw, self.rho[j], c.p[j], c.u[j]);
     }
 
     #[inline(always)]
-    fn finish(&self, _: &Group, t: ConductionSums, [du]: Self::Out<'_>) {
-        let add = (self.alpha_u * t.5).to_array();
+    fn finish(&self, _: &Group, (_, _, sum): Self::Sums, [du]: Self::Out<'_>) {
+        let add = (self.c.alpha_u * sum).to_array();
         for (d, a) in du.iter_mut().zip(add) {
             *d += a;
         }

@@ -4,7 +4,7 @@
 use crate::av_switch::{
     balsara, iad_and_velocity_divergence, update_alpha, velocity_divergence, FlowState,
 };
-use crate::conduction::conduction;
+use crate::conduction::Conductivity;
 use crate::conserved::Conserved;
 use crate::density::{density, pressure_energy_density, ve_density, xmass, Positions, VeOut};
 use crate::eos::Eos;
@@ -135,10 +135,8 @@ pub enum Stage {
     Iad,
     /// Viscosity switches: velocity divergence and alpha update.
     Switches,
-    /// Momentum and energy equations.
+    /// Momentum and energy equations (with the artificial conductivity).
     Momentum,
-    /// Artificial conductivity.
-    Conduction,
     /// Self-gravity.
     Gravity,
     /// Halo exchanges of fields between stages (rho, P, c, Omega; IAD;
@@ -153,7 +151,7 @@ pub enum Stage {
 }
 
 /// Names of the timed stages, in pipeline order ([`Stage`]).
-pub const STAGES: [&str; 14] = [
+pub const STAGES: [&str; 13] = [
     "sync",
     "tree",
     "neighbors",
@@ -162,7 +160,6 @@ pub const STAGES: [&str; 14] = [
     "iad",
     "switches",
     "momentum",
-    "conduction",
     "gravity",
     "halos",
     "conserved",
@@ -611,14 +608,6 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         }
         let forces = self.momentum(p, bbox);
         clock.lap(Stage::Momentum);
-        if let Some(alpha_u) = self.config.scheme.conductivity {
-            let state = hydro_state!(p);
-            let (list, kernel) = (&self.list, &self.kernel);
-            conduction(
-                kernel, bbox, state.pos, state.rho, state.p, &p.u, alpha_u, list, &mut p.du,
-            );
-            clock.lap(Stage::Conduction);
-        }
         if step == 1 {
             // Adams-Bashforth needs du_{n-1}; the first step uses du_0.
             p.du_prev[owned.clone()].copy_from_slice(&p.du[owned.clone()]);
@@ -914,6 +903,11 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             stress: s
                 .artificial_stress
                 .map(|e| ArtificialStress::new(e, self.config.neighbors.ng0, &self.kernel)),
+            conduction: s.conductivity.map(|alpha_u| Conductivity {
+                alpha_u,
+                p: &p.p,
+                u: &p.u,
+            }),
         };
         let (k, f, list) = (&self.kernel, &self.factors, &self.list);
         momentum_energy_with(k, bbox, state, f, scheme, list, rates)

@@ -23,6 +23,7 @@
 //! balances the kinetic energy change exactly, and viscosity only heats.
 
 use crate::av_switch::FlowState;
+use crate::conduction::{ConductionTarget, Conductivity};
 use crate::density::Positions;
 pub use crate::pair_loop::Gradients;
 use crate::pair_loop::{
@@ -161,6 +162,7 @@ pub fn momentum_energy<K: Kernel>(
         volumes: VolumeWeights::Mass,
         stress: None,
         cleaning: None,
+        conduction: None,
     };
     momentum_energy_with(kernel, bbox, s, f, scheme, nl, out)
 }
@@ -190,6 +192,7 @@ pub fn momentum_energy_switched<K: Kernel>(
         volumes: VolumeWeights::Mass,
         stress: None,
         cleaning: None,
+        conduction: None,
     };
     momentum_energy_with(kernel, bbox, s, f, scheme, nl, out)
 }
@@ -253,6 +256,9 @@ pub struct MomentumScheme<'a> {
     pub stress: Option<ArtificialStress>,
     /// Cleaning of the viscosity's velocity jump, or none.
     pub cleaning: Option<AvCleaning<'a>>,
+    /// Artificial conductivity added to du/dt, or none (the sum of
+    /// [`conduction`](crate::conduction::conduction), in this pass).
+    pub conduction: Option<Conductivity<'a>>,
 }
 
 /// SPH-EXA's "AV cleaning": the viscosity of pair `i, j` sees the
@@ -398,6 +404,7 @@ pub fn momentum_energy_with<K: Kernel>(
         volumes: scheme.volumes,
         stress: scheme.stress,
         cleaning: scheme.cleaning,
+        conduction: scheme.conduction,
         nl,
         out,
     };
@@ -420,6 +427,7 @@ struct MomentumRun<'a, K> {
     volumes: VolumeWeights<'a>,
     stress: Option<ArtificialStress>,
     cleaning: Option<AvCleaning<'a>>,
+    conduction: Option<Conductivity<'a>>,
     nl: &'a CompactNeighborList,
     out: Rates<'a>,
 }
@@ -444,7 +452,7 @@ impl<K: Kernel> WithGradients for MomentumRun<'_, K> {
         let xm = self.volumes.elements().map_or(&[][..], |x| &x[..n]);
         let product = matches!(self.volumes, VolumeWeights::Product(_));
         let sphexa = self.av_form == AvForm::SphExa;
-        let stress = (self.stress, self.cleaning);
+        let stress = (self.stress, self.cleaning, self.conduction);
         macro_rules! go {
             ($sw:literal, $a:expr, $per:expr) => {
                 match (!xm.is_empty(), sphexa) {
@@ -514,7 +522,11 @@ fn momentum<'a, K, const IAD: bool, const SWITCHED: bool, const VE: bool, const 
     alpha: f64,
     alpha_per: &'a [f64],
     (xm, product): (&'a [f64], bool),
-    (stress, cleaning): (Option<ArtificialStress>, Option<AvCleaning<'a>>),
+    (stress, cleaning, conduction): (
+        Option<ArtificialStress>,
+        Option<AvCleaning<'a>>,
+        Option<Conductivity<'a>>,
+    ),
 ) -> Momentum<'a, K, IAD, SWITCHED, VE, SPHEXA> {
     Momentum {
         flow,
@@ -527,6 +539,7 @@ fn momentum<'a, K, const IAD: bool, const SWITCHED: bool, const VE: bool, const 
         product,
         stress,
         cleaning,
+        conduction,
     }
 }
 
@@ -548,6 +561,7 @@ struct Momentum<'a, K, const IAD: bool, const SWITCHED: bool, const VE: bool, co
     product: bool,
     stress: Option<ArtificialStress>,
     cleaning: Option<AvCleaning<'a>>,
+    conduction: Option<Conductivity<'a>>,
 }
 
 /// What the pair stages read of every particle, cut to one length (so
@@ -619,12 +633,16 @@ struct MomentumSums {
     /// The targets' symmetric velocity gradients (AV cleaning only).
     grad_i: [F64s; 6],
     ci_m: [F64s; 6],
+    /// The targets' side of the conduction (conductivity only).
+    cond_i: Option<ConductionTarget>,
     acc_a: [F64s; 3],
     /// `sum_j m_j v_ij . A_ij(h_i)`
     acc_ep: F64s,
     acc_eav: F64s,
     acc_div: F64s,
     acc_vsig: F64s,
+    /// The conduction sum, before the factor `alpha_u`.
+    acc_cond: F64s,
 }
 
 impl<K: Kernel, const IAD: bool, const SWITCHED: bool, const VE: bool, const SPHEXA: bool> PairStage
@@ -681,6 +699,10 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool, const VE: bool, const SPH
             acc_eav: zero,
             acc_div: zero,
             acc_vsig: if SPHEXA { zero } else { ci },
+            cond_i: self
+                .conduction
+                .map(|c| ConductionTarget::load(g, self.flow.norm, inv_hi, self.flow.rho, &c)),
+            acc_cond: zero,
         }
     }
 
@@ -694,34 +716,52 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool, const VE: bool, const SPH
         };
         // Lanes whose target has j as neighbour get weight 1, the others
         // compute with r = 1 (finite) and weight 0.
+        let r2_true = r2;
         let (r2, weight) = neighbour_lanes(r2, t.reach_i, reach_j);
         let mj = self.flow.m[j] * weight;
         let inv_r = 1.0 / r2.sqrt();
         let rr = r2 * inv_r;
         let inv_hj = self.inv_h[j];
         let inv_hi = t.inv_hi;
-        // A_ij(h_i), A_ij(h_j).
-        // A_ij(h_i), A_ij(h_j) and the kernel shapes w(r/h_i), w(r/h_j).
-        let (ai, aj, shape_i, shape_j) = if IAD {
+        // A_ij(h_i), A_ij(h_j), the kernel shapes w(r/h_i), w(r/h_j) and,
+        // with conduction, (K/h_i^4 w'(r/h_i) + K/h_j^4 w'(r/h_j)) / 2.
+        let (ai, aj, shape_i, shape_j, dw_mean) = if IAD {
             // A = C (x_j - x_i) W = -(C d) W
             let si = self.flow.kernel.shape_lanes(rr * inv_hi);
             let sj = self.flow.kernel.shape_lanes(rr * inv_hj);
-            let wi = t.ki3 * si;
+            // The derivatives at the true distance, as the conduction's own
+            // pass takes them (measured faster than from `rr` here).
+            let dw_mean = match &t.cond_i {
+                Some(ci) => ci.mean_derivative(self.flow.kernel, norm, r2_true, inv_hi, inv_hj),
+                None => zero,
+            };
             let kj3 = norm * inv_hj * inv_hj * inv_hj;
+            let wi = t.ki3 * si;
             let wj = kj3 * sj;
             let cj = [0, 1, 2, 3, 4, 5].map(|k| F64s::splat(self.flow.iad[k][j]));
             let cd = sym_mat_vec(&t.ci_m, d);
             let cdj = sym_mat_vec(&cj, d);
-            (scale3(cd, -wi), scale3(cdj, -wj), si, sj)
+            (scale3(cd, -wi), scale3(cdj, -wj), si, sj, dw_mean)
         } else {
             // grad_i W(r, h) = K/h^4 w'(r/h) d / r
             let (si, dwi) = self.flow.kernel.shape_and_derivative_lanes(rr * inv_hi);
             let (sj, dwj) = self.flow.kernel.shape_and_derivative_lanes(rr * inv_hj);
-            let gi = t.ki3 * inv_hi * dwi * inv_r;
+            let ki4_dwi = t.ki3 * inv_hi * dwi;
             let kj4 = norm * inv_hj * inv_hj * inv_hj * inv_hj;
-            let gj = kj4 * dwj * inv_r;
-            (scale3(d, gi), scale3(d, gj), si, sj)
+            let kj4_dwj = kj4 * dwj;
+            let (gi, gj) = (ki4_dwi * inv_r, kj4_dwj * inv_r);
+            (
+                scale3(d, gi),
+                scale3(d, gj),
+                si,
+                sj,
+                0.5 * (ki4_dwi + kj4_dwj),
+            )
         };
+        if let (Some(c), Some(ci)) = (&self.conduction, &t.cond_i) {
+            let (rho_j, p_j, u_j) = (self.flow.rho[j], c.p[j], c.u[j]);
+            t.acc_cond += ci.term(mj, dw_mean, rho_j, p_j, u_j);
+        }
         let vi = t.vi;
         let vij = [
             vi[0] - self.flow.v[0][j],
@@ -794,7 +834,11 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool, const VE: bool, const SPH
         t.acc_a[0].store(ax);
         t.acc_a[1].store(ay);
         t.acc_a[2].store(az);
-        (t.pre_i * t.acc_ep + 0.5 * t.acc_eav).store(du);
+        let du_i = t.pre_i * t.acc_ep + 0.5 * t.acc_eav;
+        match self.conduction {
+            Some(c) => (du_i + c.alpha_u * t.acc_cond).store(du),
+            None => du_i.store(du),
+        }
         let vsig = if SPHEXA {
             F64s::select_positive(t.acc_vsig, t.acc_vsig, t.ci)
         } else {

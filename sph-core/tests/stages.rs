@@ -5,6 +5,7 @@ mod common;
 
 use proptest::prelude::*;
 use sph_core::av_switch::{velocity_divergence, FlowState};
+use sph_core::conduction::{conduction, Conductivity};
 use sph_core::density::{density, Positions};
 use sph_core::iad::iad;
 use sph_core::integrate::integrate;
@@ -241,6 +242,19 @@ fn compute_forces_with(
     tension: bool,
     cleaning: Cleaning,
 ) {
+    compute_forces_conducting(s, gradients, stress, tension, cleaning, None);
+}
+
+/// As `compute_forces_with`, with the artificial conductivity `alpha_u`
+/// inside the momentum pass.
+fn compute_forces_conducting(
+    s: &mut Setup,
+    gradients: Gradients,
+    stress: Option<ArtificialStress>,
+    tension: bool,
+    cleaning: Cleaning,
+    conductivity: Option<f64>,
+) {
     let p = &mut s.p;
     Eos::IdealGas { gamma: 5.0 / 3.0 }.apply(&p.rho, &p.u, None, &mut p.p, &mut p.c);
     if tension {
@@ -301,6 +315,11 @@ fn compute_forces_with(
         cleaning: (!grad.is_empty()).then(|| AvCleaning {
             grad_v: std::array::from_fn(|k| grad[k].as_slice()),
             eta_crit: AvCleaning::eta_crit(100),
+        }),
+        conduction: conductivity.map(|alpha_u| Conductivity {
+            alpha_u,
+            p: &p.p,
+            u: &p.u,
         }),
     };
     momentum_energy_with(&kernel(), &s.bbox, state, &factors, scheme, &s.list, rates);
@@ -612,6 +631,63 @@ fn conductivity_conserves_energy_and_flows_downhill() {
         .min_by(|&a, &b| s.p.u[a].total_cmp(&s.p.u[b]))
         .unwrap();
     assert!(du[coldest] >= 0.0, "the coldest particle must not cool");
+}
+
+/// The conduction summed inside the momentum pass is the conduction's own
+/// pass added to the momentum pass without it: bit for bit with IAD
+/// gradients (the same kernel derivatives at the same distance), to
+/// round-off with kernel gradients (the derivatives the momentum terms
+/// take, at `r^2 / r`).
+#[test]
+fn conduction_inside_the_momentum_pass_equals_its_own_pass() {
+    for gradients in [Gradients::Iad, Gradients::Kernel] {
+        let mut s = lattice(10, 0.3, 60.0, 7);
+        let n = s.p.len();
+        for i in 0..n {
+            let r2 = s.p.x[i].powi(2) + s.p.y[i].powi(2) + s.p.z[i].powi(2);
+            s.p.u[i] = 1.0 + 5.0 * (-r2 / 0.01).exp();
+            s.p.vx[i] = -s.p.x[i];
+        }
+        compute_density(&mut s);
+        compute_iad(&mut s);
+        compute_forces_conducting(&mut s, gradients, None, false, Cleaning::Off, None);
+        let mut expected = s.p.du.clone();
+        let pos = Positions {
+            x: &s.p.x,
+            y: &s.p.y,
+            z: &s.p.z,
+            h: &s.p.h,
+            m: &s.p.m,
+        };
+        let p = &s.p;
+        conduction(
+            &kernel(),
+            &s.bbox,
+            pos,
+            &p.rho,
+            &p.p,
+            &p.u,
+            2.0,
+            &s.list,
+            &mut expected,
+        );
+        let accel = [s.p.ax.clone(), s.p.ay.clone(), s.p.az.clone()];
+        compute_forces_conducting(&mut s, gradients, None, false, Cleaning::Off, Some(2.0));
+        assert_eq!(accel, [s.p.ax.clone(), s.p.ay.clone(), s.p.az.clone()]);
+        let scale = expected.iter().fold(0.0f64, |a, d| a.max(d.abs()));
+        assert!(scale > 0.0);
+        for (i, (&got, &want)) in s.p.du.iter().zip(&expected).enumerate() {
+            match gradients {
+                Gradients::Iad => assert_eq!(got.to_bits(), want.to_bits(), "du[{i}]"),
+                Gradients::Kernel => {
+                    assert!(
+                        (got - want).abs() <= 1e-13 * scale,
+                        "du[{i}]: {got} vs {want}"
+                    )
+                }
+            }
+        }
+    }
 }
 
 /// The per-target scalar loops the lane loops must reproduce: sequential

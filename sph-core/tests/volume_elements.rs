@@ -253,6 +253,7 @@ fn forces_with(s: &mut Setup, alpha: Alpha<'_>, volume: Volume, gradients: Gradi
         volumes: VolumeWeights::of(volume, &s.xm),
         stress: None,
         cleaning: None,
+        conduction: None,
     };
     let rates = Rates {
         ax: &mut p.ax,
