@@ -329,3 +329,26 @@ fn closed_stdout_ends_the_listing_quietly() {
     assert!(out.status.success(), "status {:?}: {err}", out.status);
     assert!(!err.contains("panicked"), "{err}");
 }
+
+/// The `dt` column of a `conserved.csv`.
+fn dts(csv: &str) -> Vec<f64> {
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    let k = header.iter().position(|&h| h == "dt").expect("dt column");
+    lines
+        .map(|l| l.split(',').nth(k).expect("dt").parse().expect("number"))
+        .collect()
+}
+
+#[test]
+fn sedov_starts_at_the_criteria_step_and_ramp_restores_the_growth_from_dt0() {
+    let free = dts(&tiny_sedov("first-step-default", &[]));
+    let ramp = dts(&tiny_sedov("first-step-ramp", &["--first-step", "ramp"]));
+    // SPH-EXA's start: 1.1 dt0 = 1.1e-6, then 1.1 per step.
+    assert!((ramp[0] - 1.1e-6).abs() < 1e-18, "{ramp:?}");
+    assert!((ramp[1] - 1.21e-6).abs() < 1e-18, "{ramp:?}");
+    // The Courant step of the hot centre at 8^3 is ~1e-3: hundreds of dt0.
+    assert!(free[0] > 100.0 * ramp[0], "{free:?}");
+    // After it the growth limit holds again.
+    assert!(free[1] <= 1.1 * free[0] * (1.0 + 1e-15), "{free:?}");
+}

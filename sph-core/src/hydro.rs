@@ -357,7 +357,8 @@ pub struct Hydro<K: Kernel, C: Communicator = SerialComm> {
 
 impl<K: Kernel> Hydro<K> {
     /// A serial pipeline at time `t0`, whose previous step is taken as `dt0`
-    /// (the first step is at most `max_growth * dt0`). Initial conditions
+    /// (the first step is at most `max_growth * dt0` unless the time step
+    /// says otherwise: [`FirstStep`](crate::timestep::FirstStep)). Initial conditions
     /// must have `dx = v dt0` (see [`Hydro::prepare`]).
     pub fn new(kernel: K, config: HydroConfig, t0: f64, dt0: f64) -> Result<Self, CoreError> {
         Self::with_comm(
@@ -661,10 +662,9 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             min_h_over_vsig: ext.min_h_over_vsig,
             max_abs_div_v: ext.max_abs_div_v,
         };
-        let (dt, limit) = self
-            .config
-            .timestep
-            .dt_limited(&global, ext.acc_max, self.dt_prev);
+        let ts = self.config.timestep;
+        let growth_base = ts.growth_base(step, self.dt_prev);
+        let (dt, limit) = ts.dt_limited(&global, ext.acc_max, growth_base);
         let capped = dt.min(self.dt_cap);
         let dt_limit = if capped < dt || dt.is_nan() {
             DtLimit::Cap

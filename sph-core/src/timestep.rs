@@ -16,6 +16,23 @@ pub struct TimestepParams {
     pub eta_acc: f64,
     /// Length `eps` of the acceleration criterion.
     pub eps_acc: f64,
+    /// How the first step relates to the given first time step `dt0`.
+    pub first_step: FirstStep,
+}
+
+/// The first step of a run: held to `max_growth * dt0`, from which the
+/// steps grow by `max_growth` each until a criterion takes over (SPH-EXA's
+/// start: its Sedov begins at `dt0 = 1e-6` and spends about 60 steps
+/// growing), or the criteria's step at once. Either way `dt0` is the
+/// integrator's previous step (the first velocity update reads
+/// `v_0 + a_0 dt0 / 2`). A resumed run continues from its checkpoint.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FirstStep {
+    /// At most `max_growth * dt0`.
+    #[default]
+    Ramp,
+    /// The criteria's step (Courant, density change, acceleration).
+    Criteria,
 }
 
 impl Default for TimestepParams {
@@ -26,6 +43,7 @@ impl Default for TimestepParams {
             max_growth: 1.1,
             eta_acc: 0.2,
             eps_acc: 0.005,
+            first_step: FirstStep::Ramp,
         }
     }
 }
@@ -108,5 +126,24 @@ impl TimestepParams {
         .find(|&(v, _)| v == dt)
         .map_or(DtLimit::Growth, |(_, l)| l);
         (dt, limit)
+    }
+
+    /// The previous step the growth limit of step `step` (1 for the
+    /// first) compares with: `dt_prev`, or none (infinite) on the first
+    /// step with [`FirstStep::Criteria`].
+    ///
+    /// ```
+    /// use sph_core::timestep::{FirstStep, TimestepParams};
+    /// let ramp = TimestepParams::default();
+    /// assert_eq!(ramp.growth_base(1, 1e-6), 1e-6);
+    /// let free = TimestepParams { first_step: FirstStep::Criteria, ..ramp };
+    /// assert_eq!(free.growth_base(1, 1e-6), f64::INFINITY);
+    /// assert_eq!(free.growth_base(2, 1e-6), 1e-6);
+    /// ```
+    pub fn growth_base(&self, step: u64, dt_prev: f64) -> f64 {
+        match self.first_step {
+            FirstStep::Criteria if step == 1 => f64::INFINITY,
+            _ => dt_prev,
+        }
     }
 }

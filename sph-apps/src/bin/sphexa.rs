@@ -5,7 +5,7 @@ use clap::parser::ValueSource;
 use clap::{
     ArgAction, ArgMatches, Args, CommandFactory, FromArgMatches, Parser, Subcommand, ValueEnum,
 };
-use sph_apps::cases::{self, Physics, Scheme, SchemeOverrides};
+use sph_apps::cases::{self, FirstStep, Physics, Scheme, SchemeOverrides};
 use sph_apps::checkpoint;
 use sph_apps::output::snapshot::{self as snapfile, Schedule};
 use sph_apps::simulation::{CheckpointEvery, Outputs, Progress, Stop};
@@ -213,6 +213,16 @@ enum AvFormArg {
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq)]
+enum FirstStepArg {
+    /// At most 1.1 times the case's first dt, growing by 1.1 per step
+    /// until a time-step criterion takes over (SPH-EXA's start).
+    Ramp,
+    /// The time-step criteria's step at once (Courant, density change,
+    /// acceleration).
+    Criteria,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq)]
 enum SmoothingArg {
     /// Follows the neighbour count every step.
     Adaptive,
@@ -319,6 +329,10 @@ struct RunArgs {
     /// 0.2, evrard 0.4).
     #[arg(long, allow_negative_numbers = true, value_parser = parse_courant)]
     courant: Option<f64>,
+    /// The first time step (default: the case's, see `sphexa cases`:
+    /// criteria for sedov, ramp elsewhere).
+    #[arg(long, value_enum)]
+    first_step: Option<FirstStepArg>,
     /// The grad-h correction Omega (default: the case's, see `sphexa cases`).
     #[arg(long, value_enum)]
     grad_h: Option<Switch>,
@@ -989,7 +1003,18 @@ fn scheme_options(s: &Scheme, physics: Physics) -> String {
     if let Some(k) = physics.courant {
         text += &format!(" --courant {k}");
     }
+    if physics.first_step != FirstStep::Ramp {
+        text += &format!(" --first-step {}", first_step_name(physics.first_step));
+    }
     text
+}
+
+/// The `--first-step` value of `f`.
+fn first_step_name(f: FirstStep) -> &'static str {
+    match f {
+        FirstStep::Ramp => "ramp",
+        FirstStep::Criteria => "criteria",
+    }
 }
 
 /// The `--av-form` value of `f`.
@@ -1076,6 +1101,10 @@ fn scheme_overrides(a: &RunArgs) -> Result<SchemeOverrides, AppError> {
         }),
         softening: a.softening,
         courant: a.courant,
+        first_step: a.first_step.map(|f| match f {
+            FirstStepArg::Ramp => FirstStep::Ramp,
+            FirstStepArg::Criteria => FirstStep::Criteria,
+        }),
     })
 }
 
@@ -1327,6 +1356,10 @@ fn resolved_config(
     );
     set("alpha", Value::Float(s.alpha()));
     set("courant", Value::Float(config.timestep.k_courant));
+    set(
+        "first-step",
+        Value::String(first_step_name(config.timestep.first_step).into()),
+    );
     set("grad-h", on(s.grad_h));
     set("av-switches", on(s.switches().is_some()));
     set("conductivity", Value::Float(s.conductivity.unwrap_or(0.0)));

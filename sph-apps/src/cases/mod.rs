@@ -26,7 +26,7 @@ use sph_tree::BoundingBox;
 
 mod scheme;
 
-pub use scheme::{Physics, Scheme, SchemeOverrides};
+pub use scheme::{FirstStep, Physics, Scheme, SchemeOverrides};
 
 /// Declares each case's module and lists its type in [`CASES`]: one line
 /// per case.

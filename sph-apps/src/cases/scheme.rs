@@ -2,13 +2,14 @@
 //! a case's scheme ([`Scheme`], from sph-core) and physics ([`Physics`])
 //! are written into a [`HydroConfig`].
 
+pub use sph_core::timestep::FirstStep;
 pub use sph_core::Scheme;
 use sph_core::{AvForm, Eos, Gradients, HydroConfig, Volume};
 use sph_gravity::GravityParams;
 
 /// The physics of a case besides its scheme: the equation of state,
 /// self-gravity and, where its flow allows a longer step than the default,
-/// the Courant factor.
+/// the Courant factor and a first step at the criteria's.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Physics {
     /// Equation of state.
@@ -19,22 +20,27 @@ pub struct Physics {
     /// The case's Courant factor, or `None` to keep the run's
     /// (`TimestepParams::k_courant`, default 0.2).
     pub courant: Option<f64>,
+    /// The first step: grown from the case's first `dt0`, or the
+    /// criteria's at once.
+    pub first_step: FirstStep,
 }
 
 impl Physics {
     /// An ideal gas with gamma = 5/3, no self-gravity, the run's Courant
-    /// factor.
+    /// factor, the first step grown from `dt0`.
     pub const IDEAL_GAS: Physics = Physics {
         eos: Eos::IdealGas { gamma: 5.0 / 3.0 },
         softening: None,
         courant: None,
+        first_step: FirstStep::Ramp,
     };
 }
 
 /// What a run changes in a case's scheme (the command line's `--scheme`,
 /// `--gradients`, `--grad-h`, `--alpha`, `--av-switches`,
 /// `--conductivity`, `--artificial-stress`, `--smoothing-length`,
-/// `--volume`, `--av-cleaning`, `--av-form`, `--softening`, `--courant`); `None` keeps the case's choice. The
+/// `--volume`, `--av-cleaning`, `--av-form`, `--softening`, `--courant`,
+/// `--first-step`); `None` keeps the case's choice. The
 /// default overrides nothing.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct SchemeOverrides {
@@ -65,6 +71,8 @@ pub struct SchemeOverrides {
     pub softening: Option<f64>,
     /// Courant factor (over the case's, see [`Physics::courant`]).
     pub courant: Option<f64>,
+    /// The first step (over the case's, see [`Physics::first_step`]).
+    pub first_step: Option<FirstStep>,
 }
 
 impl SchemeOverrides {
@@ -119,6 +127,7 @@ impl SchemeOverrides {
         if let Some(k) = self.courant.or(physics.courant) {
             config.timestep.k_courant = k;
         }
+        config.timestep.first_step = self.first_step.unwrap_or(physics.first_step);
     }
 }
 
@@ -177,6 +186,26 @@ mod tests {
         // A case without its own keeps the run's.
         SchemeOverrides::default().apply(Scheme::PAPER, Physics::IDEAL_GAS, &mut config);
         assert_eq!(config.timestep.k_courant, 0.25);
+    }
+
+    #[test]
+    fn the_cases_first_step_applies_unless_overridden() {
+        let mut config = HydroConfig::default();
+        let free = Physics {
+            first_step: FirstStep::Criteria,
+            ..Physics::IDEAL_GAS
+        };
+        SchemeOverrides::default().apply(Scheme::PAPER, free, &mut config);
+        assert_eq!(config.timestep.first_step, FirstStep::Criteria);
+        let o = SchemeOverrides {
+            first_step: Some(FirstStep::Ramp),
+            ..Default::default()
+        };
+        o.apply(Scheme::PAPER, free, &mut config);
+        assert_eq!(config.timestep.first_step, FirstStep::Ramp);
+        // A case without the choice resets what the caller passed.
+        SchemeOverrides::default().apply(Scheme::PAPER, Physics::IDEAL_GAS, &mut config);
+        assert_eq!(config.timestep.first_step, FirstStep::Ramp);
     }
 
     #[test]
