@@ -341,9 +341,12 @@ fn dts(csv: &str) -> Vec<f64> {
 }
 
 #[test]
-fn sedov_starts_at_the_criteria_step_and_ramp_restores_the_growth_from_dt0() {
-    let free = dts(&tiny_sedov("first-step-default", &[]));
-    let ramp = dts(&tiny_sedov("first-step-ramp", &["--first-step", "ramp"]));
+fn first_step_criteria_skips_the_growth_from_dt0() {
+    let ramp = dts(&tiny_sedov("first-step-default", &[]));
+    let free = dts(&tiny_sedov(
+        "first-step-criteria",
+        &["--first-step", "criteria"],
+    ));
     // SPH-EXA's start: 1.1 dt0 = 1.1e-6, then 1.1 per step.
     assert!((ramp[0] - 1.1e-6).abs() < 1e-18, "{ramp:?}");
     assert!((ramp[1] - 1.21e-6).abs() < 1e-18, "{ramp:?}");

@@ -329,8 +329,10 @@ struct RunArgs {
     /// 0.2, evrard 0.4).
     #[arg(long, allow_negative_numbers = true, value_parser = parse_courant)]
     courant: Option<f64>,
-    /// The first time step (default: the case's, see `sphexa cases`:
-    /// criteria for sedov, ramp elsewhere).
+    /// The first time step (default: ramp). `criteria` skips the ramp
+    /// from the case's first dt: Sedov (dt0 = 1e-6, as SPH-EXA) then
+    /// starts at the Courant step of its hot centre, with about 60 steps
+    /// fewer to t = 0.05.
     #[arg(long, value_enum)]
     first_step: Option<FirstStepArg>,
     /// The grad-h correction Omega (default: the case's, see `sphexa cases`).

@@ -1,10 +1,10 @@
 //! Sedov-Taylor point blast in a periodic box, set up as the C++ SPH-EXA
 //! does: regular lattice in `[-0.5, 0.5]^3`, rho = 1, gamma = 5/3, E = 1
-//! deposited as a Gaussian of width 0.1, dt0 = 1e-6. Unlike SPH-EXA, the
-//! first step is the criteria's, not 1.1 dt0 (`--first-step ramp` restores
-//! the ramp).
+//! deposited as a Gaussian of width 0.1, first dt = 1e-6 and a growth of
+//! 1.1 per step from there (`--first-step criteria` starts at the Courant
+//! step of the hot centre instead: ~60 steps fewer, README).
 
-use super::{FirstStep, Layout, Listing, Physics, cube_lattice, field_set, initial_h, Case, InitialState, Reference, Scheme, Share};
+use super::{Layout, Listing, cube_lattice, field_set, initial_h, Case, InitialState, Reference, Scheme, Share};
 use crate::reference::Sedov;
 use crate::AppError;
 use sph_core::HydroConfig;
@@ -36,19 +36,6 @@ impl Case for SedovBlast {
     /// The paper's scheme.
     fn default_scheme(&self) -> Scheme {
         Scheme::PAPER
-    }
-
-    /// The default gas, with the first step at the criteria's (the
-    /// Courant step of the hot centre, ~3e-4 at 30^3) instead of SPH-EXA's
-    /// ramp from 1e-6 by 1.1 per step, which spent 64 of 124 steps at 30^3
-    /// and 61 of 145 at 37^3 (`best --av-cleaning on`) before the Courant
-    /// condition took over; the L1 errors at t = 0.05 move in the fourth
-    /// digit (README).
-    fn physics(&self) -> Physics {
-        Physics {
-            first_step: FirstStep::Criteria,
-            ..Physics::IDEAL_GAS
-        }
     }
 
 
