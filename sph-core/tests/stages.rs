@@ -103,6 +103,17 @@ fn rebuild_lists(s: &mut Setup, keys: &[u64]) {
         .unwrap();
 }
 
+/// The positions, smoothing lengths and masses of `p`.
+fn positions(p: &Particles) -> Positions<'_> {
+    Positions {
+        x: &p.x,
+        y: &p.y,
+        z: &p.z,
+        h: &p.h,
+        m: &p.m,
+    }
+}
+
 fn compute_density(s: &mut Setup) {
     let p = &mut s.p;
     let pos = Positions {
@@ -601,13 +612,7 @@ fn conductivity_conserves_energy_and_flows_downhill() {
         s.p.p[i] = 2.0 / 3.0 * s.p.rho[i] * s.p.u[i];
     }
     let mut du = vec![0.0; n];
-    let pos = Positions {
-        x: &s.p.x,
-        y: &s.p.y,
-        z: &s.p.z,
-        h: &s.p.h,
-        m: &s.p.m,
-    };
+    let pos = positions(&s.p);
     sph_core::conduction::conduction(
         &kernel(),
         &s.bbox,
@@ -652,13 +657,7 @@ fn conduction_inside_the_momentum_pass_equals_its_own_pass() {
         compute_iad(&mut s);
         compute_forces_conducting(&mut s, gradients, None, false, Cleaning::Off, None);
         let mut expected = s.p.du.clone();
-        let pos = Positions {
-            x: &s.p.x,
-            y: &s.p.y,
-            z: &s.p.z,
-            h: &s.p.h,
-            m: &s.p.m,
-        };
+        let pos = positions(&s.p);
         let p = &s.p;
         conduction(
             &kernel(),
