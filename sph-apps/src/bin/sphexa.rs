@@ -1005,9 +1005,6 @@ fn scheme_options(s: &Scheme, physics: Physics) -> String {
     if let Some(k) = physics.courant {
         text += &format!(" --courant {k}");
     }
-    if physics.first_step != FirstStep::Ramp {
-        text += &format!(" --first-step {}", first_step_name(physics.first_step));
-    }
     text
 }
 

@@ -96,7 +96,6 @@ impl Case for EvrardCollapse {
             eos: Eos::IdealGas { gamma: GAMMA },
             softening: Some(0.25),
             courant: Some(COURANT),
-            ..Physics::IDEAL_GAS
         }
     }
 

@@ -9,7 +9,7 @@ use sph_gravity::GravityParams;
 
 /// The physics of a case besides its scheme: the equation of state,
 /// self-gravity and, where its flow allows a longer step than the default,
-/// the Courant factor and a first step at the criteria's.
+/// the Courant factor.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Physics {
     /// Equation of state.
@@ -20,19 +20,15 @@ pub struct Physics {
     /// The case's Courant factor, or `None` to keep the run's
     /// (`TimestepParams::k_courant`, default 0.2).
     pub courant: Option<f64>,
-    /// The first step: grown from the case's first `dt0`, or the
-    /// criteria's at once.
-    pub first_step: FirstStep,
 }
 
 impl Physics {
     /// An ideal gas with gamma = 5/3, no self-gravity, the run's Courant
-    /// factor, the first step grown from `dt0`.
+    /// factor.
     pub const IDEAL_GAS: Physics = Physics {
         eos: Eos::IdealGas { gamma: 5.0 / 3.0 },
         softening: None,
         courant: None,
-        first_step: FirstStep::Ramp,
     };
 }
 
@@ -71,7 +67,8 @@ pub struct SchemeOverrides {
     pub softening: Option<f64>,
     /// Courant factor (over the case's, see [`Physics::courant`]).
     pub courant: Option<f64>,
-    /// The first step (over the case's, see [`Physics::first_step`]).
+    /// The first step (over the run's, `TimestepParams::first_step`,
+    /// default [`FirstStep::Ramp`]).
     pub first_step: Option<FirstStep>,
 }
 
@@ -127,7 +124,9 @@ impl SchemeOverrides {
         if let Some(k) = self.courant.or(physics.courant) {
             config.timestep.k_courant = k;
         }
-        config.timestep.first_step = self.first_step.unwrap_or(physics.first_step);
+        if let Some(f) = self.first_step {
+            config.timestep.first_step = f;
+        }
     }
 }
 
@@ -189,22 +188,21 @@ mod tests {
     }
 
     #[test]
-    fn the_cases_first_step_applies_unless_overridden() {
+    fn the_first_step_override_applies_and_none_keeps_the_runs() {
         let mut config = HydroConfig::default();
-        let free = Physics {
-            first_step: FirstStep::Criteria,
-            ..Physics::IDEAL_GAS
+        let o = SchemeOverrides {
+            first_step: Some(FirstStep::Criteria),
+            ..Default::default()
         };
-        SchemeOverrides::default().apply(Scheme::PAPER, free, &mut config);
+        o.apply(Scheme::PAPER, Physics::IDEAL_GAS, &mut config);
+        assert_eq!(config.timestep.first_step, FirstStep::Criteria);
+        SchemeOverrides::default().apply(Scheme::PAPER, Physics::IDEAL_GAS, &mut config);
         assert_eq!(config.timestep.first_step, FirstStep::Criteria);
         let o = SchemeOverrides {
             first_step: Some(FirstStep::Ramp),
             ..Default::default()
         };
-        o.apply(Scheme::PAPER, free, &mut config);
-        assert_eq!(config.timestep.first_step, FirstStep::Ramp);
-        // A case without the choice resets what the caller passed.
-        SchemeOverrides::default().apply(Scheme::PAPER, Physics::IDEAL_GAS, &mut config);
+        o.apply(Scheme::PAPER, Physics::IDEAL_GAS, &mut config);
         assert_eq!(config.timestep.first_step, FirstStep::Ramp);
     }
 
