@@ -219,6 +219,8 @@ struct StepExtremes {
     sync_seconds_max: f64,
     /// Largest |a| (self-gravity runs; 0 otherwise).
     acc_max: f64,
+    /// Largest `-du/dt / u` (0 where no internal energy falls).
+    cooling_max: f64,
     /// Largest `|v_n|` component on open axes (box growth).
     speed_max: f64,
     /// Largest `|a|` component on open axes (box growth).
@@ -243,6 +245,7 @@ impl StepExtremes {
             -self.speed_max,
             -self.acc_component_max,
             -self.h_next_max,
+            -self.cooling_max,
         ];
         comm.all_reduce(&mut m, ReduceOp::Min);
         Self {
@@ -259,6 +262,7 @@ impl StepExtremes {
             speed_max: -m[10],
             acc_component_max: -m[11],
             h_next_max: -m[12],
+            cooling_max: -m[13],
         }
     }
 }
@@ -635,8 +639,9 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         // extremes, and the next step's bounds: the largest h after this
         // step's update, and how far a particle can move (open axes).
         let h_update = self.config.neighbors.h_update(self.config.h_update);
-        let [speed_max, acc_component_max, h_next_max] =
-            self.motion_bounds(p, bbox, owned.clone(), h_update);
+        let guard = self.config.eos.uses_internal_energy();
+        let [speed_max, acc_component_max, h_next_max, cooling_max] =
+            self.motion_bounds(p, bbox, owned.clone(), h_update, guard);
         let (nc_min, nc_max) = if owned.is_empty() {
             (f64::INFINITY, f64::NEG_INFINITY)
         } else {
@@ -653,6 +658,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             comm_seconds_max: sync.comm_seconds,
             sync_seconds_max: sync.sync_seconds,
             acc_max,
+            cooling_max,
             speed_max,
             acc_component_max,
             h_next_max,
@@ -664,7 +670,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         };
         let ts = self.config.timestep;
         let growth_base = ts.growth_base(step, self.dt_prev);
-        let (dt, limit) = ts.dt_limited(&global, ext.acc_max, growth_base);
+        let (dt, limit) = ts.dt_limited(&global, ext.acc_max, ext.cooling_max, growth_base);
         let capped = dt.min(self.dt_cap);
         let dt_limit = if capped < dt || dt.is_nan() {
             DtLimit::Cap
@@ -675,7 +681,6 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         self.dt_cap = f64::INFINITY;
         clock.lap(Stage::Timestep);
 
-        let guard = self.config.eos.uses_internal_energy();
         let report = integrate(
             p,
             owned,
@@ -940,16 +945,19 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
 }
 
 impl<K: Kernel, C: Communicator> Hydro<K, C> {
-    /// Over the owned particles: `[max_k |v_n,k|, max_k |a_k|, max h_next]`
-    /// with `v_n = dX / dt_prev + a dt_prev / 2` (the Press velocity the
-    /// integrator will use) and `h_next = h * factor(nc)` (its h update).
+    /// Over the owned particles: `[max_k |v_n,k|, max_k |a_k|, max h_next,
+    /// max -du/dt / u]` with `v_n = dX / dt_prev + a dt_prev / 2` (the
+    /// Press velocity the integrator will use), `h_next = h * factor(nc)`
+    /// (its h update) and the cooling rate over particles with `u > 0` and
+    /// falling (0 unless `energy`: the pressure depends on `u`).
     fn motion_bounds(
         &self,
         p: &Particles,
         bbox: &BoundingBox,
         owned: Range<usize>,
         hu: HUpdate,
-    ) -> [f64; 3] {
+        energy: bool,
+    ) -> [f64; 4] {
         let any_open = (0..3).any(|k| !bbox.is_periodic(k));
         let half = 0.5 * self.dt_prev;
         let inv = 1.0 / self.dt_prev;
@@ -957,15 +965,21 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             .into_par_iter()
             .map(|i| {
                 let h_next = p.h[i] * hu.factor(p.nc[i]);
+                // (Read only with `energy`: the fields may be empty.)
+                let cooling = if energy && p.u[i] > 0.0 && p.du[i] < 0.0 {
+                    -p.du[i] / p.u[i]
+                } else {
+                    0.0
+                };
                 if !any_open {
-                    return [0.0, 0.0, h_next];
+                    return [0.0, 0.0, h_next, cooling];
                 }
                 let a = [p.ax[i].abs(), p.ay[i].abs(), p.az[i].abs()];
                 let d = [p.dx[i].abs(), p.dy[i].abs(), p.dz[i].abs()];
                 let v = (0..3).map(|k| d[k] * inv + a[k] * half).fold(0.0, f64::max);
-                [v, a[0].max(a[1]).max(a[2]), h_next]
+                [v, a[0].max(a[1]).max(a[2]), h_next, cooling]
             })
-            .reduce(|| [0.0; 3], |x, y| std::array::from_fn(|k| x[k].max(y[k])))
+            .reduce(|| [0.0; 4], |x, y| std::array::from_fn(|k| x[k].max(y[k])))
     }
 
     /// Evaluates the self-gravity of all particles on the owned ones (into

@@ -2,7 +2,8 @@
 
 use crate::momentum::MomentumStats;
 
-/// Time-step criteria (PHYSICS.md): Courant, density change, growth limit.
+/// Time-step criteria (PHYSICS.md): Courant, density change, acceleration,
+/// falling internal energy, growth limit.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TimestepParams {
     /// Courant factor on `h / v_sig`.
@@ -16,6 +17,14 @@ pub struct TimestepParams {
     pub eta_acc: f64,
     /// Length `eps` of the acceleration criterion.
     pub eps_acc: f64,
+    /// Factor `k_u` of the energy criterion `k_u min u_i / |du_i/dt|` over
+    /// the particles whose internal energy falls: at first order no step
+    /// takes more than this fraction of a particle's `u`. Adiabatic
+    /// expansion gives `|du/dt| / u = (gamma - 1) |div v|`, which the
+    /// density-change criterion already bounds more tightly; this one
+    /// catches pressure work that outruns it (a cold clump far below the
+    /// resolution of its surroundings) before `u` turns negative.
+    pub k_u: f64,
     /// How the first step relates to the given first time step `dt0`.
     pub first_step: FirstStep,
 }
@@ -43,6 +52,7 @@ impl Default for TimestepParams {
             max_growth: 1.1,
             eta_acc: 0.2,
             eps_acc: 0.005,
+            k_u: 0.5,
             first_step: FirstStep::Ramp,
         }
     }
@@ -57,6 +67,8 @@ pub enum DtLimit {
     Divergence,
     /// Acceleration: `eta sqrt(eps / max |a|)`.
     Acceleration,
+    /// Falling internal energy: `k_u min u / |du/dt|`.
+    Energy,
     /// Growth limit: `max_growth * dt_prev`.
     Growth,
     /// A cap from outside (an output or end time).
@@ -65,10 +77,11 @@ pub enum DtLimit {
 
 impl DtLimit {
     /// Every limit, in the order above.
-    pub const ALL: [DtLimit; 5] = [
+    pub const ALL: [DtLimit; 6] = [
         DtLimit::Courant,
         DtLimit::Divergence,
         DtLimit::Acceleration,
+        DtLimit::Energy,
         DtLimit::Growth,
         DtLimit::Cap,
     ];
@@ -79,6 +92,7 @@ impl DtLimit {
             DtLimit::Courant => "courant",
             DtLimit::Divergence => "divergence",
             DtLimit::Acceleration => "acceleration",
+            DtLimit::Energy => "energy",
             DtLimit::Growth => "growth",
             DtLimit::Cap => "cap",
         }
@@ -87,10 +101,13 @@ impl DtLimit {
 
 impl TimestepParams {
     /// `dt = min(Kcour min h/v_sig, Krho / max|div v|, eta sqrt(eps/max|a|),
-    /// growth * dt_prev)`, from stats already reduced over all particles
-    /// (and ranks); `max_acc` is zero when the acceleration criterion is off.
-    pub fn dt(&self, stats: &MomentumStats, max_acc: f64, dt_prev: f64) -> f64 {
-        self.dt_limited(stats, max_acc, dt_prev).0
+    /// k_u / max(-du/dt / u), growth * dt_prev)`, from stats already
+    /// reduced over all particles (and ranks); `max_acc` is zero when the
+    /// acceleration criterion is off, `max_cooling` (the largest
+    /// `-du_i/dt / u_i` over particles with `u_i > 0`) zero when no
+    /// internal energy falls or the equation of state ignores `u`.
+    pub fn dt(&self, stats: &MomentumStats, max_acc: f64, max_cooling: f64, dt_prev: f64) -> f64 {
+        self.dt_limited(stats, max_acc, max_cooling, dt_prev).0
     }
 
     /// [`dt`](Self::dt) and the criterion that set it (the first of
@@ -101,10 +118,18 @@ impl TimestepParams {
     /// use sph_core::timestep::{DtLimit, TimestepParams};
     /// let p = TimestepParams::default();
     /// let s = MomentumStats { min_h_over_vsig: 1.0, max_abs_div_v: 0.0 };
-    /// assert_eq!(p.dt_limited(&s, 0.0, 1.0), (0.2, DtLimit::Courant));
-    /// assert_eq!(p.dt_limited(&s, 0.0, 0.1).1, DtLimit::Growth);
+    /// assert_eq!(p.dt_limited(&s, 0.0, 0.0, 1.0), (0.2, DtLimit::Courant));
+    /// assert_eq!(p.dt_limited(&s, 0.0, 0.0, 0.1).1, DtLimit::Growth);
+    /// // A particle losing 10 times its u per unit time: at most k_u / 10.
+    /// assert_eq!(p.dt_limited(&s, 0.0, 10.0, 1.0), (0.05, DtLimit::Energy));
     /// ```
-    pub fn dt_limited(&self, stats: &MomentumStats, max_acc: f64, dt_prev: f64) -> (f64, DtLimit) {
+    pub fn dt_limited(
+        &self,
+        stats: &MomentumStats,
+        max_acc: f64,
+        max_cooling: f64,
+        dt_prev: f64,
+    ) -> (f64, DtLimit) {
         let courant = self.k_courant * stats.min_h_over_vsig;
         let div = if stats.max_abs_div_v > 0.0 {
             self.k_rho / stats.max_abs_div_v
@@ -116,11 +141,21 @@ impl TimestepParams {
         } else {
             f64::INFINITY
         };
-        let dt = courant.min(div).min(acc).min(self.max_growth * dt_prev);
+        let energy = if max_cooling > 0.0 {
+            self.k_u / max_cooling
+        } else {
+            f64::INFINITY
+        };
+        let dt = courant
+            .min(div)
+            .min(acc)
+            .min(energy)
+            .min(self.max_growth * dt_prev);
         let limit = [
             (courant, DtLimit::Courant),
             (div, DtLimit::Divergence),
             (acc, DtLimit::Acceleration),
+            (energy, DtLimit::Energy),
         ]
         .into_iter()
         .find(|&(v, _)| v == dt)
