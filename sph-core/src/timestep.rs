@@ -40,7 +40,8 @@ pub enum FirstStep {
     /// At most `max_growth * dt0`.
     #[default]
     Ramp,
-    /// The criteria's step (Courant, density change, acceleration).
+    /// The criteria's step (Courant, density change, acceleration,
+    /// falling internal energy).
     Criteria,
 }
 

@@ -218,7 +218,7 @@ enum FirstStepArg {
     /// until a time-step criterion takes over (SPH-EXA's start).
     Ramp,
     /// The time-step criteria's step at once (Courant, density change,
-    /// acceleration).
+    /// acceleration, falling internal energy).
     Criteria,
 }
 
