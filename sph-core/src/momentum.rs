@@ -618,7 +618,11 @@ struct MomentumSums {
     vi: [F64s; 3],
     reach_i: F64s,
     inv_hi: F64s,
+    /// `1 / h_i^2`.
+    inv_hi2: F64s,
     ki3: F64s,
+    /// `K / h_i^5`.
+    ki5: F64s,
     ci: F64s,
     pre_i: F64s,
     inv_rho_i: F64s,
@@ -665,7 +669,9 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool, const VE: bool, const SPH
             vi: self.flow.v.map(|v| g.load(v)),
             reach_i,
             inv_hi,
+            inv_hi2: inv_hi * inv_hi,
             ki3: self.flow.norm * inv_hi * inv_hi * inv_hi,
+            ki5: self.flow.norm * inv_hi * inv_hi * inv_hi * inv_hi * inv_hi,
             ci,
             pre_i: g.load(self.pre),
             inv_rho_i: g.load(self.inv_rho),
@@ -727,8 +733,9 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool, const VE: bool, const SPH
         // with conduction, (K/h_i^4 w'(r/h_i) + K/h_j^4 w'(r/h_j)) / 2.
         let (ai, aj, shape_i, shape_j, dw_mean) = if IAD {
             // A = C (x_j - x_i) W = -(C d) W
-            let si = self.flow.kernel.shape_lanes(rr * inv_hi);
-            let sj = self.flow.kernel.shape_lanes(rr * inv_hj);
+            // The shapes from v^2 = r^2 / h^2: no root on their path.
+            let si = self.flow.kernel.shape_sq_lanes(r2 * t.inv_hi2);
+            let sj = self.flow.kernel.shape_sq_lanes(r2 * (inv_hj * inv_hj));
             // The derivatives at the true distance, as the conduction's own
             // pass takes them (measured faster than from `rr` here).
             let dw_mean = match &t.cond_i {
@@ -743,20 +750,22 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool, const VE: bool, const SPH
             let cdj = sym_mat_vec(&cj, d);
             (scale3(cd, -wi), scale3(cdj, -wj), si, sj, dw_mean)
         } else {
-            // grad_i W(r, h) = K/h^4 w'(r/h) d / r
-            let (si, dwi) = self.flow.kernel.shape_and_derivative_lanes(rr * inv_hi);
-            let (sj, dwj) = self.flow.kernel.shape_and_derivative_lanes(rr * inv_hj);
-            let ki4_dwi = t.ki3 * inv_hi * dwi;
-            let kj4 = norm * inv_hj * inv_hj * inv_hj * inv_hj;
-            let kj4_dwj = kj4 * dwj;
-            let (gi, gj) = (ki4_dwi * inv_r, kj4_dwj * inv_r);
-            (
-                scale3(d, gi),
-                scale3(d, gj),
-                si,
-                sj,
-                0.5 * (ki4_dwi + kj4_dwj),
-            )
+            // grad_i W(r, h) = K/h^4 w'(r/h) d / r = K/h^5 (w'(v)/v) d, from
+            // v^2 = r^2 / h^2: no root on the gradient's path.
+            let (v2i, v2j) = (r2 * t.inv_hi2, r2 * (inv_hj * inv_hj));
+            let gi = t.ki5 * self.flow.kernel.derivative_over_v_sq_lanes(v2i);
+            let kj5 = norm * inv_hj * inv_hj * inv_hj * inv_hj * inv_hj;
+            let gj = kj5 * self.flow.kernel.derivative_over_v_sq_lanes(v2j);
+            // The shapes only feed the artificial stress.
+            let (si, sj) = match self.stress {
+                Some(_) => (
+                    self.flow.kernel.shape_sq_lanes(v2i),
+                    self.flow.kernel.shape_sq_lanes(v2j),
+                ),
+                None => (zero, zero),
+            };
+            // K/h^4 w'(r/h) = (K/h^5 w'/v) r.
+            (scale3(d, gi), scale3(d, gj), si, sj, 0.5 * (gi + gj) * rr)
         };
         if let (Some(c), Some(ci)) = (&self.conduction, &t.cond_i) {
             let (rho_j, p_j, u_j) = (self.flow.rho[j], c.p[j], c.u[j]);

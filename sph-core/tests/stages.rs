@@ -744,7 +744,6 @@ fn scalar_reference(s: &Setup, gradients: Gradients) -> (Vec<f64>, Vec<f64>, [Ve
             let d = sep(pos(i), pos(j));
             let r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
             let inv_r = 1.0 / r2.sqrt();
-            let rr = r2 * inv_r;
             let inv_hj = 1.0 / p.h[j];
             let mv = |c: usize, d: [f64; 3]| -> [f64; 3] {
                 let m = std::array::from_fn::<f64, 6, _>(|k| p.iad[k][c]);
@@ -754,15 +753,17 @@ fn scalar_reference(s: &Setup, gradients: Gradients) -> (Vec<f64>, Vec<f64>, [Ve
                     m[2] * d[0] + m[4] * d[1] + m[5] * d[2],
                 ]
             };
+            let (v2i, v2j) = (r2 * (inv_hi * inv_hi), r2 * (inv_hj * inv_hj));
             let (ai, aj) = if iad {
-                let wi = ki3 * k.shape(rr * inv_hi);
-                let wj = norm * inv_hj * inv_hj * inv_hj * k.shape(rr * inv_hj);
+                let wi = ki3 * k.shape_sq(v2i);
+                let wj = norm * inv_hj * inv_hj * inv_hj * k.shape_sq(v2j);
                 let (cd, cdj) = (mv(i, d), mv(j, d));
                 (cd.map(|c| -c * wi), cdj.map(|c| -c * wj))
             } else {
-                let gi = ki3 * inv_hi * k.shape_derivative(rr * inv_hi) * inv_r;
-                let kj4 = norm * inv_hj * inv_hj * inv_hj * inv_hj;
-                let gj = kj4 * k.shape_derivative(rr * inv_hj) * inv_r;
+                let ki5 = norm * inv_hi * inv_hi * inv_hi * inv_hi * inv_hi;
+                let gi = ki5 * k.derivative_over_v_sq(v2i);
+                let kj5 = norm * inv_hj * inv_hj * inv_hj * inv_hj * inv_hj;
+                let gj = kj5 * k.derivative_over_v_sq(v2j);
                 (d.map(|c| gi * c), d.map(|c| gj * c))
             };
             let vij = [p.vx[i] - p.vx[j], p.vy[i] - p.vy[j], p.vz[i] - p.vz[j]];

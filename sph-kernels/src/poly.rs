@@ -223,83 +223,129 @@ impl fmt::Debug for Polynomial {
     }
 }
 
-/// `sum c[k] t^k` over the first `terms` coefficients: the even and odd
-/// halves by Horner's rule in `t^2` as two independent chains (half the
-/// latency of one chain; the pair loops are latency-bound), then
-/// `even + t odd`. Scalar and lane forms run the same operations.
+/// Scalars and lanes, for the one polynomial evaluation both share (so
+/// lane `l` is the scalar result bit for bit).
+trait PolyValue: Copy {
+    fn splat(c: f64) -> Self;
+    fn mul(self, b: Self) -> Self;
+    /// `self b + c`: fused where the build targets FMA (in both forms),
+    /// else a multiply and an add.
+    fn mul_add(self, b: Self, c: Self) -> Self;
+}
+
+impl PolyValue for f64 {
+    #[inline(always)]
+    fn splat(c: f64) -> Self {
+        c
+    }
+
+    #[inline(always)]
+    fn mul(self, b: Self) -> Self {
+        self * b
+    }
+
+    #[inline(always)]
+    fn mul_add(self, b: Self, c: Self) -> Self {
+        if cfg!(target_feature = "fma") {
+            f64::mul_add(self, b, c)
+        } else {
+            self * b + c
+        }
+    }
+}
+
+impl PolyValue for F64s {
+    #[inline(always)]
+    fn splat(c: f64) -> Self {
+        F64s::splat(c)
+    }
+
+    #[inline(always)]
+    fn mul(self, b: Self) -> Self {
+        self * b
+    }
+
+    #[inline(always)]
+    fn mul_add(self, b: Self, c: Self) -> Self {
+        if cfg!(target_feature = "fma") {
+            F64s(self.0.mul_add(b.0, c.0))
+        } else {
+            self * b + c
+        }
+    }
+}
+
+/// `sum c[k] t^k` over the first `terms` coefficients. The pair loops
+/// are latency-bound (a pair's chain from `r^2` to the sums is longer
+/// than the out-of-order window can hide, on AVX2 above all), so the
+/// polynomial is evaluated by Estrin's scheme, whose depth grows as
+/// `log2(terms)`: fully unrolled for the term counts of the default
+/// kernel's shape and derivative (sinc:6: 17 and 16), by two Horner
+/// chains in `t^2` for other counts.
 #[inline(always)]
-fn horner(c: &[f64; MAX_TERMS], terms: usize, t: f64) -> f64 {
+fn poly<V: PolyValue>(c: &[f64; MAX_TERMS], terms: usize, t: V) -> V {
+    match terms {
+        17 => estrin::<V, 17>(c, t),
+        16 => estrin::<V, 16>(c, t),
+        _ => horner(c, terms, t),
+    }
+}
+
+/// Estrin's scheme for `N` terms: pairs `c[2i] + c[2i+1] t`, then pairs of
+/// those with `t^2`, with `t^4`, ... (depth `ceil(log2 N)` multiply-adds
+/// instead of `N - 1`).
+#[inline(always)]
+fn estrin<V: PolyValue, const N: usize>(c: &[f64; MAX_TERMS], t: V) -> V {
+    let mut v: [V; N] = std::array::from_fn(|k| V::splat(c[k]));
+    let (mut n, mut x) = (N, t);
+    while n > 1 {
+        let half = n.div_ceil(2);
+        for i in 0..half {
+            v[i] = if 2 * i + 1 < n {
+                v[2 * i + 1].mul_add(x, v[2 * i])
+            } else {
+                v[2 * i]
+            };
+        }
+        n = half;
+        if n > 1 {
+            x = x.mul(x);
+        }
+    }
+    v[0]
+}
+
+/// `sum c[k] t^k` by Horner's rule in `t^2` for the even and odd halves
+/// as two independent chains, then `even + t odd`.
+#[inline(always)]
+fn horner<V: PolyValue>(c: &[f64; MAX_TERMS], terms: usize, t: V) -> V {
     let top = terms - 1;
     if top == 0 {
-        return c[0];
+        return V::splat(c[0]);
     }
-    let t2 = t * t;
+    let t2 = t.mul(t);
     // Highest even and odd indices.
     let (mut e, mut o) = if top.is_multiple_of(2) {
         (top, top - 1)
     } else {
         (top - 1, top)
     };
-    let (mut even, mut odd) = (c[e], c[o]);
+    let (mut even, mut odd) = (V::splat(c[e]), V::splat(c[o]));
     while e >= 2 {
         e -= 2;
-        even = mul_add(even, t2, c[e]);
+        even = even.mul_add(t2, V::splat(c[e]));
     }
     while o >= 2 {
         o -= 2;
-        odd = mul_add(odd, t2, c[o]);
+        odd = odd.mul_add(t2, V::splat(c[o]));
     }
-    mul_add(odd, t, even)
-}
-
-/// `a b + c`: fused where the build targets FMA (then the lane form fuses
-/// too, so both agree bit for bit), else a multiply and an add.
-#[inline(always)]
-fn mul_add(a: f64, b: f64, c: f64) -> f64 {
-    if cfg!(target_feature = "fma") {
-        a.mul_add(b, c)
-    } else {
-        a * b + c
-    }
-}
-
-#[inline(always)]
-fn mul_add_lanes(a: F64s, b: F64s, c: F64s) -> F64s {
-    if cfg!(target_feature = "fma") {
-        F64s(a.0.mul_add(b.0, c.0))
-    } else {
-        a * b + c
-    }
-}
-
-#[inline(always)]
-fn horner_lanes(c: &[f64; MAX_TERMS], terms: usize, t: F64s) -> F64s {
-    let top = terms - 1;
-    if top == 0 {
-        return F64s::splat(c[0]);
-    }
-    let t2 = t * t;
-    let (mut e, mut o) = if top.is_multiple_of(2) {
-        (top, top - 1)
-    } else {
-        (top - 1, top)
-    };
-    let (mut even, mut odd) = (F64s::splat(c[e]), F64s::splat(c[o]));
-    while e >= 2 {
-        e -= 2;
-        even = mul_add_lanes(even, t2, F64s::splat(c[e]));
-    }
-    while o >= 2 {
-        o -= 2;
-        odd = mul_add_lanes(odd, t2, F64s::splat(c[o]));
-    }
-    mul_add_lanes(odd, t, even)
+    odd.mul_add(t, even)
 }
 
 impl Kernel for Polynomial {
     #[inline]
     fn shape(&self, v: f64) -> f64 {
-        let w = horner(&self.w, self.terms, self.t(v));
+        let w = poly(&self.w, self.terms, self.t(v));
         // `v < support` is false for NaN too.
         if v < self.support {
             w
@@ -316,8 +362,8 @@ impl Kernel for Polynomial {
     #[inline]
     fn shape_and_derivative(&self, v: f64) -> (f64, f64) {
         let t = self.t(v);
-        let w = horner(&self.w, self.terms, t);
-        let mut dw = horner(&self.dw, self.terms - 1, t);
+        let w = poly(&self.w, self.terms, t);
+        let mut dw = poly(&self.dw, self.terms - 1, t);
         if self.variable == FitVariable::Square {
             dw *= v;
         }
@@ -330,15 +376,15 @@ impl Kernel for Polynomial {
 
     #[inline(always)]
     fn shape_lanes(&self, v: F64s) -> F64s {
-        let w = horner_lanes(&self.w, self.terms, self.t_lanes(v));
+        let w = poly(&self.w, self.terms, self.t_lanes(v));
         v.lt(F64s::splat(self.support)).select(w, F64s::splat(0.0))
     }
 
     #[inline(always)]
     fn shape_and_derivative_lanes(&self, v: F64s) -> (F64s, F64s) {
         let t = self.t_lanes(v);
-        let w = horner_lanes(&self.w, self.terms, t);
-        let mut dw = horner_lanes(&self.dw, self.terms - 1, t);
+        let w = poly(&self.w, self.terms, t);
+        let mut dw = poly(&self.dw, self.terms - 1, t);
         if self.variable == FitVariable::Square {
             dw *= v;
         }
@@ -352,7 +398,7 @@ impl Kernel for Polynomial {
         match self.variable {
             // w' = v P'(t) (chain factor in dw), so w' / v = P'(t).
             FitVariable::Square => {
-                let dw = horner(&self.dw, self.terms - 1, self.t_sq(v2));
+                let dw = poly(&self.dw, self.terms - 1, self.t_sq(v2));
                 if v2 < self.support * self.support {
                     dw
                 } else {
@@ -370,7 +416,7 @@ impl Kernel for Polynomial {
     fn derivative_over_v_sq_lanes(&self, v2: F64s) -> F64s {
         match self.variable {
             FitVariable::Square => {
-                let dw = horner_lanes(&self.dw, self.terms - 1, self.t_sq_lanes(v2));
+                let dw = poly(&self.dw, self.terms - 1, self.t_sq_lanes(v2));
                 self.inside_sq(v2, dw)
             }
             FitVariable::Radius => {
@@ -384,7 +430,7 @@ impl Kernel for Polynomial {
     fn shape_sq(&self, v2: f64) -> f64 {
         match self.variable {
             FitVariable::Square => {
-                let w = horner(&self.w, self.terms, self.t_sq(v2));
+                let w = poly(&self.w, self.terms, self.t_sq(v2));
                 if v2 < self.support * self.support {
                     w
                 } else {
@@ -400,8 +446,8 @@ impl Kernel for Polynomial {
         match self.variable {
             FitVariable::Square => {
                 let t = self.t_sq(v2);
-                let w = horner(&self.w, self.terms, t);
-                let vdw = horner(&self.dw, self.terms - 1, t) * v2;
+                let w = poly(&self.w, self.terms, t);
+                let vdw = poly(&self.dw, self.terms - 1, t) * v2;
                 if v2 < self.support * self.support {
                     (w, vdw)
                 } else {
@@ -420,7 +466,7 @@ impl Kernel for Polynomial {
     fn shape_sq_lanes(&self, v2: F64s) -> F64s {
         match self.variable {
             FitVariable::Square => {
-                let w = horner_lanes(&self.w, self.terms, self.t_sq_lanes(v2));
+                let w = poly(&self.w, self.terms, self.t_sq_lanes(v2));
                 self.inside_sq(v2, w)
             }
             FitVariable::Radius => self.shape_lanes(v2.sqrt()),
@@ -433,8 +479,8 @@ impl Kernel for Polynomial {
             // w' = v P'(t) dw-coefficients, so v w' = v^2 (...): no root.
             FitVariable::Square => {
                 let t = self.t_sq_lanes(v2);
-                let w = horner_lanes(&self.w, self.terms, t);
-                let vdw = horner_lanes(&self.dw, self.terms - 1, t) * v2;
+                let w = poly(&self.w, self.terms, t);
+                let vdw = poly(&self.dw, self.terms - 1, t) * v2;
                 (self.inside_sq(v2, w), self.inside_sq(v2, vdw))
             }
             FitVariable::Radius => {
