@@ -931,22 +931,29 @@ fn cleaning_correction(
 /// the pair terms stay antisymmetric.
 #[inline(always)]
 fn atwood_weights(rho_i: F64s, rho_j: f64, xi: F64s, xj: f64) -> (F64s, F64s) {
+    let (zero, one) = (F64s::splat(0.0), F64s::splat(1.0));
     let rho_j = F64s::splat(rho_j);
-    let at = (rho_i - rho_j).abs() / (rho_i + rho_j);
+    // At < c as |rho_i - rho_j| < c (rho_i + rho_j): no division per pair
+    // (the divider is the pair loop's scarcest unit).
+    let (jump, sum) = ((rho_i - rho_j).abs(), rho_i + rho_j);
     let xj_l = F64s::splat(xj);
     let cross = xi * xj_l;
-    let low = at.lt(F64s::splat(ATWOOD_MIN));
-    let high = at.gt(F64s::splat(ATWOOD_MAX));
+    let low = jump.lt(ATWOOD_MIN * sum);
+    let high = jump.gt(ATWOOD_MAX * sum);
     let mut a = low.select(xi * xi, cross);
     let mut b = low.select(xj_l * xj_l, cross);
     if !(low | high).all() {
         // The ramp, lane by lane (rare: interfaces).
-        let at_l = at.to_array();
+        let at_l = (jump / sum).to_array();
+        let (low_l, high_l) = (
+            low.select(one, zero).to_array(),
+            high.select(one, zero).to_array(),
+        );
         let (xi_l, mut al, mut bl) = (xi.to_array(), a.to_array(), b.to_array());
         let ramp = 1.0 / (ATWOOD_MAX - ATWOOD_MIN);
         for l in 0..LANES {
-            if (ATWOOD_MIN..=ATWOOD_MAX).contains(&at_l[l]) {
-                let s = ramp * (at_l[l] - ATWOOD_MIN);
+            if low_l[l] == 0.0 && high_l[l] == 0.0 {
+                let s = (ramp * (at_l[l] - ATWOOD_MIN)).clamp(0.0, 1.0);
                 al[l] = xi_l[l].powf(2.0 - s) * xj.powf(s);
                 bl[l] = xj.powf(2.0 - s) * xi_l[l].powf(s);
             }
