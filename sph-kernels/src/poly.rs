@@ -33,16 +33,17 @@ pub enum FitVariable {
 }
 
 /// A kernel shape approximated by one polynomial `P(t)` over its support
-/// (Chebyshev interpolation, stored as monomial coefficients for Horner's
-/// rule), with the derivative `dw/dv = P'(t) dt/dv`; zero from the support
-/// radius on.
+/// (Chebyshev interpolation, stored as monomial coefficients and evaluated
+/// by Estrin's scheme), with the derivative `dw/dv = P'(t) dt/dv`; zero
+/// from the support radius on.
 ///
 /// [`Polynomial::fit`] picks the variable and the lowest degree whose
 /// largest error over 4000 check points is within a given fraction of
 /// `max |w|` (shape) and of `max |w'|` (derivative), or fails; the
 /// normalisation and support are copied from the source kernel. Scalar and
-/// lane forms run the same operations in the same order (no fused
-/// multiply-add), so lane `l` equals the scalar result bit for bit.
+/// lane forms run the same operations in the same order (multiply-adds
+/// fused in both or in neither, as the build's target features allow), so
+/// lane `l` equals the scalar result bit for bit.
 ///
 /// ```
 /// use sph_kernels::{F64s, Kernel, Polynomial, Sinc};
