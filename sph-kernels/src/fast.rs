@@ -4,11 +4,12 @@
 use std::fmt;
 
 use crate::kernel::Kernel;
-use crate::{F64s, KernelError, Polynomial, Tabulated};
+use crate::{F64s, KernelError, Polynomial, PowerPolynomial, Tabulated};
 
-/// A kernel prepared for the pair loops: [`Polynomial`] when one
-/// reproduces the kernel to [`FastKernel::TOLERANCE`] of its scale (the
-/// sinc family with integer exponent, the Wendland kernels), else the
+/// A kernel prepared for the pair loops: [`PowerPolynomial`] for a power
+/// of a smooth base ([`Kernel::power_of`]: the sinc family with integer
+/// exponent), else [`Polynomial`] when one reproduces the kernel to
+/// [`FastKernel::TOLERANCE`] of its scale (the Wendland kernels), else the
 /// [`Tabulated`] lookup table (M4, whose second derivative jumps at
 /// `v = 1`). The polynomial is both more accurate than the table (whose
 /// interpolation error is ~1e-8) and, without gathers from memory,
@@ -19,7 +20,7 @@ use crate::{F64s, KernelError, Polynomial, Tabulated};
 /// ```
 /// use sph_kernels::{CubicSpline, FastKernel, Kernel, Sinc};
 /// let sinc = FastKernel::new(&Sinc::new(6.0)?)?;
-/// assert!(matches!(sinc, FastKernel::Polynomial(_)));
+/// assert!(matches!(sinc, FastKernel::Power(_)));
 /// assert!((sinc.shape(0.5) - Sinc::new(6.0)?.shape(0.5)).abs() < 1e-9);
 /// let m4 = FastKernel::new(&CubicSpline)?;
 /// assert!(matches!(m4, FastKernel::Table(_)));
@@ -30,6 +31,8 @@ use crate::{F64s, KernelError, Polynomial, Tabulated};
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone)]
 pub enum FastKernel {
+    /// An integer power of one polynomial over the support.
+    Power(PowerPolynomial),
     /// One polynomial over the support.
     Polynomial(Polynomial),
     /// Linear interpolation in a table of [`Tabulated::DEFAULT_POINTS`].
@@ -49,6 +52,11 @@ impl FastKernel {
     /// As [`Tabulated::new`] (a support that is not finite and positive, a
     /// kernel that is not finite on its support).
     pub fn new<K: Kernel + ?Sized>(kernel: &K) -> Result<Self, KernelError> {
+        if let Some((base, n)) = kernel.power_of() {
+            if let Ok(p) = PowerPolynomial::fit(kernel, &*base, n, Self::TOLERANCE) {
+                return Ok(Self::Power(p));
+            }
+        }
         match Polynomial::fit(kernel, Self::TOLERANCE) {
             Ok(p) => Ok(Self::Polynomial(p)),
             Err(KernelError::NoPolynomialFit { .. }) => Ok(Self::Table(Tabulated::new(
@@ -59,10 +67,16 @@ impl FastKernel {
         }
     }
 
-    /// How the kernel is evaluated, for run reports: `polynomial of degree
-    /// 16 in v^2` or `table of 20000 points`.
+    /// How the kernel is evaluated, for run reports: `power 6 of a
+    /// polynomial of degree 8 in v^2`, `polynomial of degree 16 in v^2` or
+    /// `table of 20000 points`.
     pub fn describe(&self) -> String {
         match self {
+            Self::Power(p) => format!(
+                "power {} of a polynomial of degree {} in v^2",
+                p.power(),
+                p.base().degree()
+            ),
             Self::Polynomial(p) => format!(
                 "polynomial of degree {} in {}",
                 p.degree(),
@@ -79,6 +93,7 @@ impl FastKernel {
 impl fmt::Debug for FastKernel {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
+            Self::Power(p) => p.fmt(f),
             Self::Polynomial(p) => p.fmt(f),
             Self::Table(t) => t.fmt(f),
         }
@@ -89,6 +104,7 @@ impl fmt::Debug for FastKernel {
 macro_rules! either {
     ($self:ident, $k:ident => $e:expr) => {
         match $self {
+            FastKernel::Power($k) => $e,
             FastKernel::Polynomial($k) => $e,
             FastKernel::Table($k) => $e,
         }

@@ -131,6 +131,14 @@ pub trait Kernel: Send + Sync {
         2.0
     }
 
+    /// `Some((b, n))` when the shape is `b(v)^n` for a smooth kernel `b`
+    /// (same support) and an integer `n >= 2`, as sinc's `S_n = S_1^n`:
+    /// [`FastKernel`](crate::FastKernel) then fits `b`, which takes far
+    /// fewer terms than its power. `None` by default.
+    fn power_of(&self) -> Option<(Box<dyn Kernel>, u32)> {
+        None
+    }
+
     /// Normalisation `K`: `W(r, h) = K/h^3 w(r/h)` integrates to 1 in 3-D.
     /// For a custom kernel, [`normalisation`] computes it.
     fn norm(&self) -> f64;
@@ -215,6 +223,9 @@ macro_rules! forward_kernel {
             #[inline]
             fn support(&self) -> f64 {
                 (**self).support()
+            }
+            fn power_of(&self) -> Option<(Box<dyn Kernel>, u32)> {
+                (**self).power_of()
             }
             #[inline]
             fn norm(&self) -> f64 {

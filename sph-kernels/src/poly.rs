@@ -280,14 +280,16 @@ impl PolyValue for F64s {
 /// are latency-bound (a pair's chain from `r^2` to the sums is longer
 /// than the out-of-order window can hide, on AVX2 above all), so the
 /// polynomial is evaluated by Estrin's scheme, whose depth grows as
-/// `log2(terms)`: fully unrolled for the term counts of the default
-/// kernel's shape and derivative (sinc:6: 17 and 16), by two Horner
-/// chains in `t^2` for other counts.
+/// `log2(terms)`: fully unrolled for the term counts of the sinc base of
+/// the default kernel's power form (10 and 9), by two Horner chains in
+/// `t^2` for other counts.
 #[inline(always)]
 fn poly<V: PolyValue>(c: &[f64; MAX_TERMS], terms: usize, t: V) -> V {
     match terms {
-        17 => estrin::<V, 17>(c, t),
-        16 => estrin::<V, 16>(c, t),
+        // The power form's sinc base and its derivative (each arm is
+        // inlined into every kernel call of every pair loop: few arms).
+        10 => estrin::<V, 10>(c, t),
+        9 => estrin::<V, 9>(c, t),
         _ => horner(c, terms, t),
     }
 }
@@ -505,7 +507,7 @@ impl Kernel for Polynomial {
 
 /// The exact kernel on the check points, and the scales errors are
 /// measured against.
-struct Check {
+pub(crate) struct Check {
     v: Vec<f64>,
     w: Vec<f64>,
     dw: Vec<f64>,
@@ -514,7 +516,7 @@ struct Check {
 }
 
 impl Check {
-    fn sample<K: Kernel + ?Sized>(kernel: &K) -> Result<Self, KernelError> {
+    pub(crate) fn sample<K: Kernel + ?Sized>(kernel: &K) -> Result<Self, KernelError> {
         let s = kernel.support();
         let v: Vec<f64> = (0..CHECK_POINTS)
             .map(|i| s * i as f64 / CHECK_POINTS as f64)
@@ -541,7 +543,7 @@ impl Check {
 
     /// The larger of the shape and derivative errors of `p`, relative to
     /// their scales.
-    fn worst(&self, p: &Polynomial) -> f64 {
+    pub(crate) fn worst<P: Kernel + ?Sized>(&self, p: &P) -> f64 {
         let mut worst = 0.0f64;
         for ((&v, &w), &dw) in self.v.iter().zip(&self.w).zip(&self.dw) {
             let (a, b) = p.shape_and_derivative(v);

@@ -152,6 +152,13 @@ impl Kernel for Sinc {
     fn norm(&self) -> f64 {
         self.norm
     }
+
+    /// `S_n = S_1^n` for integer `n >= 2`.
+    fn power_of(&self) -> Option<(Box<dyn Kernel>, u32)> {
+        let base = Sinc::new(1.0).expect("1 is an allowed exponent");
+        (self.n.fract() == 0.0 && self.n >= 2.0)
+            .then(|| (Box::new(base) as Box<dyn Kernel>, self.n as u32))
+    }
 }
 
 #[cfg(test)]

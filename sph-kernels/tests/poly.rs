@@ -29,16 +29,36 @@ fn scales(k: &dyn Kernel) -> (f64, f64) {
 }
 
 #[test]
-fn the_default_kernel_is_a_polynomial_in_v_squared() {
+fn the_default_kernel_is_a_power_of_a_polynomial_in_v_squared() {
     let fast = KernelChoice::default().fast().unwrap();
-    let FastKernel::Polynomial(p) = &fast else {
-        panic!("sinc:6 should fit: {fast:?}");
+    let FastKernel::Power(p) = &fast else {
+        panic!("sinc:6 should be S_1^6: {fast:?}");
     };
-    assert_eq!(p.variable(), FitVariable::Square);
+    assert_eq!((p.power(), p.base().variable()), (6, FitVariable::Square));
     assert_eq!(
         fast.describe(),
-        format!("polynomial of degree {} in v^2", p.degree())
+        format!(
+            "power 6 of a polynomial of degree {} in v^2",
+            p.base().degree()
+        )
     );
+    // Fewer terms than the plain fit of S_6, and closer to the exact
+    // kernel than the plain fit's tolerance (errors relative to the scales).
+    let exact = Sinc::new(6.0).unwrap();
+    let plain = Polynomial::fit(&exact, FastKernel::TOLERANCE).unwrap();
+    let (base_terms, plain_terms) = (p.base().degree() + 1, plain.degree() + 1);
+    assert!(
+        3 * base_terms <= 2 * plain_terms,
+        "{base_terms} vs {plain_terms} terms"
+    );
+    let (sw, sdw) = scales(&exact);
+    for i in 0..=2000 {
+        let v = 2.0 * f64::from(i) / 2000.0;
+        let (w, dw) = exact.shape_and_derivative(v);
+        let (pw, pdw) = p.shape_and_derivative(v);
+        assert!((pw - w).abs() <= 1e-12 * sw, "v = {v}: {pw} vs {w}");
+        assert!((pdw - dw).abs() <= 1e-11 * sdw, "v = {v}: {pdw} vs {dw}");
+    }
 }
 
 #[test]
@@ -71,7 +91,7 @@ proptest! {
         let (fw, fdw) = fast.shape_and_derivative(v);
         // The table's own bound (tests/table.rs) where it is used.
         let tol = match fast {
-            FastKernel::Polynomial(_) => 1.5 * FastKernel::TOLERANCE,
+            FastKernel::Polynomial(_) | FastKernel::Power(_) => 1.5 * FastKernel::TOLERANCE,
             FastKernel::Table(_) => 1e-7,
         };
         prop_assert!((fw - w).abs() <= tol * sw, "{choice} v = {v}: {fw} vs {w}");

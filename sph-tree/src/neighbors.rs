@@ -13,7 +13,7 @@ use wide::f64x8;
 /// small enough to balance clustered sets over threads.
 const PARTICLES_PER_CHUNK: usize = 2048;
 /// Consecutive particles searched together (one tree walk per group).
-const GROUP_SIZE: usize = 32;
+const GROUP_SIZE: usize = 64;
 /// Nodes holding at most this many particles are scanned whole instead of
 /// opened further.
 const CANDIDATE_SIZE: usize = 32;
