@@ -74,8 +74,8 @@ pub struct Summary {
     pub threads: usize,
     /// Kernel used.
     pub kernel: String,
-    /// How the solver evaluates it (`polynomial of degree 16 in v^2`,
-    /// `table of 20000 points`).
+    /// How the solver evaluates it (`power 6 of a polynomial of degree 9
+    /// in v^2`, `table of 20000 points`).
     pub kernel_form: String,
     /// Mean neighbour count of the last step (self included).
     pub neighbors_mean: f64,
