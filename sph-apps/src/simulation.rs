@@ -74,7 +74,7 @@ pub struct Summary {
     pub threads: usize,
     /// Kernel used.
     pub kernel: String,
-    /// How the solver evaluates it (`power 6 of a polynomial of degree 9
+    /// How the solver evaluates it (`power 6 of a polynomial of degree 7
     /// in v^2`, `table of 20000 points`).
     pub kernel_form: String,
     /// Mean neighbour count of the last step (self included).

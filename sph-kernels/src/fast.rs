@@ -68,7 +68,7 @@ impl FastKernel {
     }
 
     /// How the kernel is evaluated, for run reports: `power 6 of a
-    /// polynomial of degree 9 in v^2`, `polynomial of degree d in v^2` or
+    /// polynomial of degree 7 in v^2`, `polynomial of degree d in v^2` or
     /// `table of 20000 points`.
     pub fn describe(&self) -> String {
         match self {

@@ -16,7 +16,7 @@ use crate::kernel::Kernel;
 use crate::{F64s, KernelError};
 
 /// Most coefficients a fit may use (degree + 1).
-const MAX_TERMS: usize = 32;
+pub(crate) const MAX_TERMS: usize = 32;
 /// Points of the error check, equally spaced over `[0, support)`.
 const CHECK_POINTS: usize = 4000;
 
@@ -110,7 +110,11 @@ impl Polynomial {
     }
 
     /// Chebyshev interpolation of `kernel` at `terms` nodes of `variable`.
-    fn interpolate<K: Kernel + ?Sized>(kernel: &K, variable: FitVariable, terms: usize) -> Self {
+    pub(crate) fn interpolate<K: Kernel + ?Sized>(
+        kernel: &K,
+        variable: FitVariable,
+        terms: usize,
+    ) -> Self {
         let support = kernel.support();
         let scale = match variable {
             FitVariable::Radius => 2.0 / support,
@@ -281,15 +285,15 @@ impl PolyValue for F64s {
 /// than the out-of-order window can hide, on AVX2 above all), so the
 /// polynomial is evaluated by Estrin's scheme, whose depth grows as
 /// `log2(terms)`: fully unrolled for the term counts of the sinc base of
-/// the default kernel's power form (10 and 9), by two Horner chains in
+/// the default kernel's power form (8 and 7), by two Horner chains in
 /// `t^2` for other counts.
 #[inline(always)]
 fn poly<V: PolyValue>(c: &[f64; MAX_TERMS], terms: usize, t: V) -> V {
     match terms {
         // The power form's sinc base and its derivative (each arm is
         // inlined into every kernel call of every pair loop: few arms).
-        10 => estrin::<V, 10>(c, t),
-        9 => estrin::<V, 9>(c, t),
+        8 => estrin::<V, 8>(c, t),
+        7 => estrin::<V, 7>(c, t),
         _ => horner(c, terms, t),
     }
 }

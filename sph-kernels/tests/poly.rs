@@ -42,13 +42,14 @@ fn the_default_kernel_is_a_power_of_a_polynomial_in_v_squared() {
             p.base().degree()
         )
     );
-    // Fewer terms than the plain fit of S_6, and closer to the exact
-    // kernel than the plain fit's tolerance (errors relative to the scales).
+    // Under half the terms of the plain fit of S_6, and within the same
+    // tolerance of the exact kernel (errors relative to the scales, on a
+    // grid finer than the fit's own check).
     let exact = Sinc::new(6.0).unwrap();
     let plain = Polynomial::fit(&exact, FastKernel::TOLERANCE).unwrap();
     let (base_terms, plain_terms) = (p.base().degree() + 1, plain.degree() + 1);
     assert!(
-        3 * base_terms <= 2 * plain_terms,
+        2 * base_terms <= plain_terms,
         "{base_terms} vs {plain_terms} terms"
     );
     let (sw, sdw) = scales(&exact);
@@ -56,8 +57,9 @@ fn the_default_kernel_is_a_power_of_a_polynomial_in_v_squared() {
         let v = 2.0 * f64::from(i) / 2000.0;
         let (w, dw) = exact.shape_and_derivative(v);
         let (pw, pdw) = p.shape_and_derivative(v);
-        assert!((pw - w).abs() <= 1e-12 * sw, "v = {v}: {pw} vs {w}");
-        assert!((pdw - dw).abs() <= 1e-11 * sdw, "v = {v}: {pdw} vs {dw}");
+        let tol = FastKernel::TOLERANCE;
+        assert!((pw - w).abs() <= tol * sw, "v = {v}: {pw} vs {w}");
+        assert!((pdw - dw).abs() <= tol * sdw, "v = {v}: {pdw} vs {dw}");
     }
 }
 
