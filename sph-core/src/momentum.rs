@@ -746,8 +746,8 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool, const VE: bool, const SPH
             let wi = t.ki3 * si;
             let wj = kj3 * sj;
             let cj = [0, 1, 2, 3, 4, 5].map(|k| F64s::splat(self.flow.iad[k][j]));
-            let cd = sym_mat_vec(&t.ci_m, d);
-            let cdj = sym_mat_vec(&cj, d);
+            let cd = sym_mat_vec_fused(&t.ci_m, d);
+            let cdj = sym_mat_vec_fused(&cj, d);
             (scale3(cd, -wi), scale3(cdj, -wj), si, sj, dw_mean)
         } else {
             // grad_i W(r, h) = K/h^4 w'(r/h) d / r = K/h^5 (w'(v)/v) d, from
@@ -777,7 +777,7 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool, const VE: bool, const SPH
             vi[1] - self.flow.v[1][j],
             vi[2] - self.flow.v[2][j],
         ];
-        let mut rv = vij[0] * d[0] + vij[1] * d[1] + vij[2] * d[2];
+        let mut rv = dot_fused(vij, d);
         if let Some(cl) = &self.cleaning {
             let cleaned =
                 rv + cleaning_correction(cl, t.grad_i, j, d, rr * inv_hi.min(F64s::splat(inv_hj)));
@@ -793,10 +793,11 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool, const VE: bool, const SPH
         let visc = if SPHEXA {
             let cij = t.ci + self.flow.c[j];
             // Courant: (c_i + c_j)/2 - 2 w over every neighbour.
-            t.acc_vsig = t.acc_vsig.max((0.5 * cij - 2.0 * w) * weight);
-            w.where_negative(-(0.5 * alpha_ij * cij - 2.0 * w) * w)
+            let two_w = F64s::splat(-2.0);
+            t.acc_vsig = t.acc_vsig.max(two_w.mul_add(w, 0.5 * cij) * weight);
+            w.where_negative(-two_w.mul_add(w, 0.5 * alpha_ij * cij) * w)
         } else {
-            let vsig = t.ci + self.flow.c[j] - 3.0 * w.min(zero);
+            let vsig = F64s::splat(-3.0).mul_add(w.min(zero), t.ci + self.flow.c[j]);
             t.acc_vsig = t.acc_vsig.max(vsig * weight);
             w.where_negative(-0.5 * alpha_ij * vsig * w)
         };
@@ -824,18 +825,20 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool, const VE: bool, const SPH
         } else {
             (t.pre_i + vi_r, self.pre[j] + vj_r, F64s::splat(1.0))
         };
+        // The sums by fused multiply-adds where the build has them (fewer
+        // operations and a shorter chain per pair; the scalar reference of
+        // the lane test takes the same forms).
+        let neg_mj = -mj;
         for c in 0..3 {
-            t.acc_a[c] -= mj * (ci_f * ai[c] + cj_f * aj[c]);
+            let f = ci_f.mul_add(ai[c], cj_f * aj[c]);
+            t.acc_a[c] = neg_mj.mul_add(f, t.acc_a[c]);
         }
-        let vai = vij[0] * ai[0] + vij[1] * ai[1] + vij[2] * ai[2];
-        let vaj = vij[0] * aj[0] + vij[1] * aj[1] + vij[2] * aj[2];
-        if VE {
-            t.acc_ep += mj * a_mom * vai;
-        } else {
-            t.acc_ep += mj * vai;
-        }
-        t.acc_eav += mj * (vi_r * vai + vj_r * vaj);
-        t.acc_div -= mj * inv_rho_j * vai;
+        let vai = dot_fused(vij, ai);
+        let vaj = dot_fused(vij, aj);
+        let ep_weight = if VE { mj * a_mom } else { mj };
+        t.acc_ep = ep_weight.mul_add(vai, t.acc_ep);
+        t.acc_eav = mj.mul_add(vi_r.mul_add(vai, vj_r * vaj), t.acc_eav);
+        t.acc_div = (neg_mj * inv_rho_j).mul_add(vai, t.acc_div);
     }
 
     #[inline(always)]
@@ -962,6 +965,24 @@ fn atwood_weights(rho_i: F64s, rho_j: f64, xi: F64s, xj: f64) -> (F64s, F64s) {
         b = F64s::from_array(bl);
     }
     (a, b)
+}
+
+/// `a . b` as `a_z b_z + (a_y b_y + a_x b_x)`, fused where the build has
+/// multiply-adds.
+#[inline(always)]
+fn dot_fused(a: [F64s; 3], b: [F64s; 3]) -> F64s {
+    a[2].mul_add(b[2], a[1].mul_add(b[1], a[0] * b[0]))
+}
+
+/// `C v` for a symmetric matrix (as [`sym_mat_vec`]), each row a
+/// [`dot_fused`].
+#[inline(always)]
+fn sym_mat_vec_fused(c: &[F64s; 6], v: [F64s; 3]) -> [F64s; 3] {
+    [
+        dot_fused([c[0], c[1], c[2]], v),
+        dot_fused([c[1], c[3], c[4]], v),
+        dot_fused([c[2], c[4], c[5]], v),
+    ]
 }
 
 #[inline(always)]

@@ -694,8 +694,11 @@ fn conduction_inside_the_momentum_pass_equals_its_own_pass() {
 /// `(rho, omega, [ax, ay, az, du])`.
 #[allow(clippy::type_complexity)]
 fn scalar_reference(s: &Setup, gradients: Gradients) -> (Vec<f64>, Vec<f64>, [Vec<f64>; 4]) {
+    use sph_kernels::lanes::mul_add;
     use sph_kernels::Kernel;
     let k = kernel();
+    // The lane loops' fused dot product: a_z b_z + (a_y b_y + a_x b_x).
+    let dot = |a: [f64; 3], b: [f64; 3]| mul_add(a[2], b[2], mul_add(a[1], b[1], a[0] * b[0]));
     let p = &s.p;
     let n = p.len();
     let norm = k.norm();
@@ -748,9 +751,9 @@ fn scalar_reference(s: &Setup, gradients: Gradients) -> (Vec<f64>, Vec<f64>, [Ve
             let mv = |c: usize, d: [f64; 3]| -> [f64; 3] {
                 let m = std::array::from_fn::<f64, 6, _>(|k| p.iad[k][c]);
                 [
-                    m[0] * d[0] + m[1] * d[1] + m[2] * d[2],
-                    m[1] * d[0] + m[3] * d[1] + m[4] * d[2],
-                    m[2] * d[0] + m[4] * d[1] + m[5] * d[2],
+                    dot([m[0], m[1], m[2]], d),
+                    dot([m[1], m[3], m[4]], d),
+                    dot([m[2], m[4], m[5]], d),
                 ]
             };
             let (v2i, v2j) = (r2 * (inv_hi * inv_hi), r2 * (inv_hj * inv_hj));
@@ -767,20 +770,19 @@ fn scalar_reference(s: &Setup, gradients: Gradients) -> (Vec<f64>, Vec<f64>, [Ve
                 (d.map(|c| gi * c), d.map(|c| gj * c))
             };
             let vij = [p.vx[i] - p.vx[j], p.vy[i] - p.vy[j], p.vz[i] - p.vz[j]];
-            let w = (vij[0] * d[0] + vij[1] * d[1] + vij[2] * d[2]) * inv_r;
-            let vsig = p.c[i] + p.c[j] - 3.0 * w.min(0.0);
+            let w = dot(vij, d) * inv_r;
+            let vsig = mul_add(-3.0, w.min(0.0), p.c[i] + p.c[j]);
             let visc = if w < 0.0 { -0.5 * vsig * w } else { 0.0 };
             let inv_rho_j = 1.0 / p.rho[j];
             let pre_j = p.p[j] * inv_rho_j * inv_rho_j / p.omega[j];
             let (vi_r, vj_r) = (0.5 * visc * inv_rho_i, 0.5 * visc * inv_rho_j);
             let (ci_f, cj_f) = (pre_i + vi_r, pre_j + vj_r);
             for c in 0..3 {
-                a[c] -= p.m[j] * (ci_f * ai[c] + cj_f * aj[c]);
+                a[c] = mul_add(-p.m[j], mul_add(ci_f, ai[c], cj_f * aj[c]), a[c]);
             }
-            let vai = vij[0] * ai[0] + vij[1] * ai[1] + vij[2] * ai[2];
-            let vaj = vij[0] * aj[0] + vij[1] * aj[1] + vij[2] * aj[2];
-            e_p += p.m[j] * vai;
-            e_av += p.m[j] * (vi_r * vai + vj_r * vaj);
+            let (vai, vaj) = (dot(vij, ai), dot(vij, aj));
+            e_p = mul_add(p.m[j], vai, e_p);
+            e_av = mul_add(p.m[j], mul_add(vi_r, vai, vj_r * vaj), e_av);
         }
         (out[0][i], out[1][i], out[2][i]) = (a[0], a[1], a[2]);
         out[3][i] = pre_i * e_p + 0.5 * e_av;

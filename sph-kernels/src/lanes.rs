@@ -1,8 +1,9 @@
 //! The lane type of the SIMD pair loops: [`F64s`], [`LANES`] `f64` values
 //! with element-wise IEEE arithmetic (on `wide::f64x8`: AVX-512, AVX or
-//! SSE2 as the build's target features allow). No reassociation and no
-//! fused multiply-add, so each lane is bit for bit what the scalar
-//! expression gives; kernels take and return lanes
+//! SSE2 as the build's target features allow). No reassociation, and
+//! multiply-adds are fused only where asked for ([`F64s::mul_add`], whose
+//! scalar twin is [`mul_add`]), so each lane is bit for bit what the
+//! scalar expression gives; kernels take and return lanes
 //! ([`Kernel::shape_lanes`](crate::Kernel::shape_lanes)) so pair loops
 //! never round-trip through arrays.
 //!
@@ -17,6 +18,18 @@
 use crate::LANES;
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
 use wide::f64x8;
+
+/// `a b + c` as [`F64s::mul_add`] computes it in each lane: fused where
+/// the build targets FMA, else a multiply and an add (never the slow
+/// software fusion of `f64::mul_add` without the instruction).
+#[inline(always)]
+pub fn mul_add(a: f64, b: f64, c: f64) -> f64 {
+    if cfg!(target_feature = "fma") {
+        a.mul_add(b, c)
+    } else {
+        a * b + c
+    }
+}
 
 /// One value per lane, as an array.
 pub type Lane = [f64; LANES];
@@ -72,6 +85,25 @@ impl F64s {
         self.to_array()
             .into_iter()
             .fold(f64::NEG_INFINITY, f64::max)
+    }
+
+    /// `self b + c` per lane: one rounding where the build targets FMA,
+    /// else a multiply and an add, as the scalar [`mul_add`] does (so a
+    /// scalar reference written with [`mul_add`] matches lane for lane).
+    ///
+    /// ```
+    /// use sph_kernels::F64s;
+    /// let (a, b, c) = (0.1, 0.7, -0.07);
+    /// let lanes = F64s::splat(a).mul_add(F64s::splat(b), F64s::splat(c));
+    /// assert_eq!(lanes.to_array()[0].to_bits(), sph_kernels::lanes::mul_add(a, b, c).to_bits());
+    /// ```
+    #[inline(always)]
+    pub fn mul_add(self, b: Self, c: Self) -> Self {
+        if cfg!(target_feature = "fma") {
+            Self(self.0.mul_add(b.0, c.0))
+        } else {
+            self * b + c
+        }
     }
 
     /// Absolute value per lane.

@@ -251,11 +251,7 @@ impl PolyValue for f64 {
 
     #[inline(always)]
     fn mul_add(self, b: Self, c: Self) -> Self {
-        if cfg!(target_feature = "fma") {
-            f64::mul_add(self, b, c)
-        } else {
-            self * b + c
-        }
+        crate::lanes::mul_add(self, b, c)
     }
 }
 
@@ -272,11 +268,7 @@ impl PolyValue for F64s {
 
     #[inline(always)]
     fn mul_add(self, b: Self, c: Self) -> Self {
-        if cfg!(target_feature = "fma") {
-            F64s(self.0.mul_add(b.0, c.0))
-        } else {
-            self * b + c
-        }
+        F64s::mul_add(self, b, c)
     }
 }
 
