@@ -793,9 +793,9 @@ impl<K: Kernel, const IAD: bool, const SWITCHED: bool, const VE: bool, const SPH
         let visc = if SPHEXA {
             let cij = t.ci + self.flow.c[j];
             // Courant: (c_i + c_j)/2 - 2 w over every neighbour.
-            let two_w = F64s::splat(-2.0);
-            t.acc_vsig = t.acc_vsig.max(two_w.mul_add(w, 0.5 * cij) * weight);
-            w.where_negative(-two_w.mul_add(w, 0.5 * alpha_ij * cij) * w)
+            let minus_two = F64s::splat(-2.0);
+            t.acc_vsig = t.acc_vsig.max(minus_two.mul_add(w, 0.5 * cij) * weight);
+            w.where_negative(-minus_two.mul_add(w, 0.5 * alpha_ij * cij) * w)
         } else {
             let vsig = F64s::splat(-3.0).mul_add(w.min(zero), t.ci + self.flow.c[j]);
             t.acc_vsig = t.acc_vsig.max(vsig * weight);
