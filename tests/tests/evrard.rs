@@ -7,9 +7,9 @@
 //! t = 1.0 (the bounce) and t = 2.0 (after it); total energy (including
 //! E_grav) conserved to 1e-2 through the bounce (t <= 1.5).
 //!
-//! Measured: t = 0.8 -2.9% / +0.7% / -0.7%, t = 1.0 +0.1% / -2.0% /
-//! -1.4%, t = 2.0 -4.2% / +5.1% / +1.7%, drift 4.8e-4 (~1 minute on 2
-//! cores); at 20^3 every entry is within 6.5%, at 40^3 within 4.7%, so
+//! Measured: t = 0.8 -3.0% / +0.6% / -0.7%, t = 1.0 -0.0% / -2.1% /
+//! -1.4%, t = 2.0 -4.3% / +5.1% / +1.7%, drift 7.1e-4 (962 steps, ~2
+//! minutes on 2 cores); at 20^3 every entry is within 6.5%, at 40^3 within 4.7%, so
 //! 7.5% is the reference's 2% above the spread over resolutions. E_kin at
 //! t = 1.0 falls by 2 per unit time there: 7.5% of it is a shift of the
 //! bounce by 0.01 in time.

@@ -326,7 +326,7 @@ struct RunArgs {
     #[arg(long, allow_negative_numbers = true, value_parser = parse_non_negative)]
     alpha: Option<f64>,
     /// Courant factor, in (0, 1] (default: the case's, see `sphexa cases`:
-    /// 0.2, evrard 0.4).
+    /// 0.2, evrard 0.5).
     #[arg(long, allow_negative_numbers = true, value_parser = parse_courant)]
     courant: Option<f64>,
     /// The first time step (default: ramp). `criteria` skips the ramp
