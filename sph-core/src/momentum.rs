@@ -1019,7 +1019,8 @@ mod tests {
             rho in proptest::collection::vec(0.1f64..10.0, LANES + 1),
             x in proptest::collection::vec(1e-6f64..1.0, LANES + 1),
         ) {
-            let (rho_i, x_i) = (F64s::from_array(core::array::from_fn(|l| rho[l])), F64s::from_array(core::array::from_fn(|l| x[l])));
+            let rho_i = F64s::from_array(std::array::from_fn(|l| rho[l]));
+            let x_i = F64s::from_array(std::array::from_fn(|l| x[l]));
             let ln_x_i = F64s::from_array(x_i.to_array().map(f64::ln));
             let (rho_j, x_j) = (rho[LANES], x[LANES]);
             let (a, b) = atwood_weights(rho_i, rho_j, x_i, ln_x_i, x_j);

@@ -9,8 +9,8 @@
 //!
 //! Measured: t = 0.8 -3.0% / +0.6% / -0.7%, t = 1.0 -0.0% / -2.1% /
 //! -1.4%, t = 2.0 -4.3% / +5.1% / +1.7%, drift 7.1e-4 (962 steps, ~2
-//! minutes on 2 cores); at 20^3 every entry is within 6.5%, at 40^3 within 4.7%, so
-//! 7.5% is the reference's 2% above the spread over resolutions. E_kin at
+//! minutes on 2 cores); at 40^3 every entry is within 4.7% (and at 20^3
+//! within 6.5%, measured with the earlier Courant factor 0.4), so 7.5% is the reference's 2% above the spread over resolutions. E_kin at
 //! t = 1.0 falls by 2 per unit time there: 7.5% of it is a shift of the
 //! bounce by 0.01 in time.
 

@@ -42,8 +42,8 @@ pub const SCHEME: Scheme = Scheme::EVRARD;
 /// (30^3: 1130 -> 962 to t = 2); on the 30^3 lattice to t = 1.0 (491 -> 416
 /// steps) E_kin at t = 1.0 goes from +4.4% to +3.7% and the rest move by at
 /// most 0.2 points. Above 0.5 the density-change criterion sets most steps
-/// (0.6: 8% fewer again). 0.2
-/// and 0.4 differ by at most 0.9 points (README, Evrard).
+/// (0.6: 8% fewer again). 0.2 and 0.4 differ by at most 0.9 points
+/// (README, Evrard).
 pub const COURANT: f64 = 0.5;
 
 /// Adiabatic index.
