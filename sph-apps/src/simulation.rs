@@ -220,6 +220,7 @@ pub struct Simulation<C: Communicator = SerialComm> {
     kernel_name: String,
     total: usize,
     write_particles: bool,
+    rank_timings: bool,
     outputs: Outputs,
     resumed_at: Option<u64>,
     watch: Option<Watch>,
@@ -305,6 +306,7 @@ impl<C: Communicator> Simulation<C> {
             kernel_name,
             total,
             write_particles: false,
+            rank_timings: false,
             outputs: Outputs::default(),
             resumed_at: resume.map(|s| s.step),
             watch: Some(Watch::new(watch::Bounds::for_run(scene_gravity), false)),
@@ -366,6 +368,16 @@ impl<C: Communicator> Simulation<C> {
         self.write_particles = on;
     }
 
+    /// Also write every other rank's stage timings (`timings.rankR.csv`,
+    /// the columns of `timings.csv`, which is rank 0's): where a
+    /// multi-rank run waits. A pair stage that takes longer on one rank is
+    /// imbalance; the `halos` and `conserved` columns of the others then
+    /// hold their wait for it. A rank that cannot write its file warns and
+    /// goes on without it (the run does not depend on a diagnostic).
+    pub fn set_rank_timings(&mut self, on: bool) {
+        self.rank_timings = on;
+    }
+
     /// How the run watches its conserved quantities (default: the bounds
     /// of [`watch::Bounds::for_run`], warnings only); `None` turns the
     /// watch off.
@@ -389,6 +401,9 @@ impl<C: Communicator> Simulation<C> {
                 TimingsCsv::create(&out.join("timings.csv"))?,
             ));
         }
+        let mut rank_log = (self.rank_timings && !root)
+            .then(|| self.rank_timings_file(out))
+            .flatten();
         let n = self.total;
         let mut bar = ProgressReporter::new(if root { progress } else { Progress::Quiet }, stop);
         let start = Instant::now();
@@ -443,6 +458,12 @@ impl<C: Communicator> Simulation<C> {
             energies.push(r.t, &r.conserved);
             totals.record(&r);
             fallbacks += r.energy_fallbacks;
+            if let Some(file) = rank_log.as_mut() {
+                if let Err(e) = file.step(&r, &totals) {
+                    eprintln!("warning: {e}; this rank's timings stop here");
+                    rank_log = None;
+                }
+            }
             if let Some((conserved, timings)) = logs.as_mut() {
                 conserved.step(&r, n)?;
                 timings.step(&r, &totals)?;
@@ -488,6 +509,9 @@ impl<C: Communicator> Simulation<C> {
             }
         }
         let wall_s = start.elapsed().as_secs_f64();
+        if let Some(Err(e)) = rank_log.map(|file| file.finish(&totals)) {
+            eprintln!("warning: {e}");
+        }
         bar.finish();
         let solver_peak_rss = self
             .hydro
@@ -588,6 +612,24 @@ impl<C: Communicator> Simulation<C> {
             summary::write(&out.join("summary.json"), &summary)?;
         }
         Ok(summary)
+    }
+
+    /// This rank's `timings.rankR.csv` ([`set_rank_timings`](Self::set_rank_timings)),
+    /// or a warning and `None`: an error here must not make this rank
+    /// leave the others waiting in a collective.
+    fn rank_timings_file(&self, out: &Path) -> Option<TimingsCsv> {
+        let rank = self.hydro.domain().comm().rank();
+        let path = out.join(format!("timings.rank{rank}.csv"));
+        let file = std::fs::create_dir_all(out)
+            .map_err(|e| AppError::io(out, e))
+            .and_then(|()| TimingsCsv::create(&path));
+        match file {
+            Ok(f) => Some(f),
+            Err(e) => {
+                eprintln!("warning: {e}; rank {rank} writes no timings");
+                None
+            }
+        }
     }
 
     /// Rank 0's files at the end of a run: the last line of `timings.csv`,
@@ -886,6 +928,7 @@ mod tests {
             let mut sim = Simulation::with_comm(scene(case), kernel, "default".into(), comm)
                 .expect("pipeline");
             sim.set_write_particles(true);
+            sim.set_rank_timings(true);
             sim.run(Stop::Steps(4), &out, Progress::Quiet).expect("run")
         });
         (summaries.into_iter().next().expect("rank 0"), out)
@@ -933,6 +976,18 @@ mod tests {
                 .map(|l| l.split(',').next().unwrap().parse().unwrap())
                 .collect();
             assert_eq!(ids, (0..a.particles as u64).collect::<Vec<_>>(), "{case}");
+            // Rank 1's timings: the steps and the means of timings.csv.
+            let lines = |d: &Path, f: &str| {
+                std::fs::read_to_string(d.join(f)).map(|t| {
+                    t.lines()
+                        .map(|l| l.split(',').next().unwrap_or("").to_string())
+                        .collect::<Vec<_>>()
+                })
+            };
+            let rank1 = lines(&dir_b, "timings.rank1.csv").expect("rank 1's timings");
+            assert_eq!(rank1, lines(&dir_b, "timings.csv").expect("timings"));
+            assert_eq!(rank1.len(), 6, "{case}: header, 4 steps, means");
+            assert!(!dir_a.join("timings.rank0.csv").exists());
             // The summary reports the process peak, at least the solver's.
             assert!(a.peak_rss_bytes >= a.solver_peak_rss_bytes);
             for d in [dir_a, dir_b] {

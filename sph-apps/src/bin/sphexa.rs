@@ -393,6 +393,13 @@ struct RunArgs {
     /// by id, exact decimal round-trip of every value).
     #[arg(long)]
     write_particles: bool,
+    /// Every rank but 0 also writes its own stage timings
+    /// (timings.rankR.csv, the columns of timings.csv, which is rank 0's):
+    /// where a multi-rank run waits. A pair stage slower on one rank is
+    /// imbalance; the others' `halos` and `conserved` columns hold their
+    /// wait for it.
+    #[arg(long)]
+    rank_timings: bool,
     /// No progress output.
     #[arg(short, long)]
     quiet: bool,
@@ -1383,6 +1390,9 @@ fn resolved_config(
     if a.strict {
         set("strict", Value::Boolean(true));
     }
+    if a.rank_timings {
+        set("rank-timings", Value::Boolean(true));
+    }
     if a.max_energy_drift != 1e-2 {
         set("max-energy-drift", Value::Float(a.max_energy_drift));
     }
@@ -1732,6 +1742,7 @@ fn run(a: RunArgs) -> Result<(), AppError> {
     };
     let result = sim.and_then(|mut sim| {
         sim.set_write_particles(a.write_particles);
+        sim.set_rank_timings(a.rank_timings);
         // Self-gravity's default momentum bound is the tree's accuracy.
         let momentum = if a.max_momentum_drift == DEFAULT_MOMENTUM_BOUND && gravity {
             GRAVITY_MOMENTUM_BOUND

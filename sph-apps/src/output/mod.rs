@@ -6,6 +6,7 @@
 //! | --- | --- | --- |
 //! | `conserved.csv` | [`conserved`] | rank 0, one line per step |
 //! | `timings.csv` | [`timings`] | rank 0, one line per step and the means |
+//! | `timings.rankR.csv` | [`timings`] | rank R > 0 its own, with `--rank-timings` |
 //! | `profile.csv`, `profile.png` | [`profile`] | rank 0, from the reduced profile |
 //! | `energies.png` | [`energies`] | rank 0, from the per-step energies |
 //! | `curve.csv`, `curve.png` | [`curve`] | rank 0, a case's tracked observable each step (reduced over the ranks) |

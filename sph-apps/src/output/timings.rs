@@ -113,7 +113,7 @@ impl StageTotals {
     }
 }
 
-/// The open `timings.csv` (rank 0 only).
+/// The open `timings.csv` (rank 0), or a rank's `timings.rankR.csv`.
 #[derive(Debug)]
 pub struct TimingsCsv(CsvFile);
 
