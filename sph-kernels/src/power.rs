@@ -57,12 +57,13 @@ impl PowerPolynomial {
             return Err(KernelError::InvalidSupport { support });
         }
         let check = Check::sample(kernel)?;
+        let norm = kernel.norm();
         if n >= 2 {
             for terms in 2..=MAX_TERMS {
                 let p = Self {
                     base: Polynomial::interpolate(base, FitVariable::Square, terms),
                     n,
-                    norm: kernel.norm(),
+                    norm,
                 };
                 if check.worst(&p) <= tolerance {
                     return Ok(p);
