@@ -942,7 +942,6 @@ fn cleaning_correction(
 /// bit for bit `a_ji`, so the pair terms stay antisymmetric.
 #[inline(always)]
 fn atwood_weights(rho_i: F64s, rho_j: f64, xi: F64s, ln_xi: F64s, xj: f64) -> (F64s, F64s) {
-    let (zero, one) = (F64s::splat(0.0), F64s::splat(1.0));
     let rho_j = F64s::splat(rho_j);
     // At < c as |rho_i - rho_j| < c (rho_i + rho_j): no division per pair
     // (the divider is the pair loop's scarcest unit).
@@ -961,15 +960,13 @@ fn atwood_weights(rho_i: F64s, rho_j: f64, xi: F64s, ln_xi: F64s, xj: f64) -> (F
         // Evrard step. With i and j swapped d changes sign exactly, so
         // b_ij = X_j^2 exp(-s d) is a_ji bit for bit.
         let at_l = (jump / sum).to_array();
-        let (low_l, high_l) = (
-            low.select(one, zero).to_array(),
-            high.select(one, zero).to_array(),
-        );
+        // Lanes on the ramp: neither below nor above it.
+        let on_ramp = !(low | high).bits();
         let (xi_l, ln_xi_l) = (xi.to_array(), ln_xi.to_array());
         let (mut al, mut bl) = (a.to_array(), b.to_array());
         let (ramp, ln_xj, xj2) = (1.0 / (ATWOOD_MAX - ATWOOD_MIN), xj.ln(), xj * xj);
         for l in 0..LANES {
-            if low_l[l] == 0.0 && high_l[l] == 0.0 {
+            if on_ramp & (1 << l) != 0 {
                 let s = (ramp * (at_l[l] - ATWOOD_MIN)).clamp(0.0, 1.0);
                 let sd = s * (ln_xj - ln_xi_l[l]);
                 al[l] = xi_l[l] * xi_l[l] * sd.exp();

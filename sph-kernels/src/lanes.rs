@@ -205,6 +205,18 @@ impl Mask {
     pub fn all(self) -> bool {
         self.0.all()
     }
+
+    /// The set lanes as bits: bit `l` for lane `l`.
+    ///
+    /// ```
+    /// use sph_kernels::F64s;
+    /// let v = F64s::from_array(std::array::from_fn(|l| l as f64));
+    /// assert_eq!(v.lt(F64s::splat(2.0)).bits(), 0b11);
+    /// ```
+    #[inline(always)]
+    pub fn bits(self) -> u32 {
+        self.0.to_bitmask()
+    }
 }
 
 impl std::ops::BitOr for Mask {
