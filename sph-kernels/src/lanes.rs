@@ -17,7 +17,12 @@
 
 use crate::LANES;
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
-use wide::f64x8;
+use wide::{f32x8, f64x8};
+
+/// [`LANES`] `f32` values, the lanes of the single-precision kernel forms
+/// ([`SinglePower`](crate::SinglePower)): one AVX register where `F64s`
+/// takes two.
+pub(crate) type F32s = f32x8;
 
 /// `a b + c` as [`F64s::mul_add`] computes it in each lane: fused where
 /// the build targets FMA, else a multiply and an add (never the slow
@@ -71,6 +76,20 @@ impl F64s {
     #[inline(always)]
     pub fn store(self, out: &mut [f64]) {
         out.copy_from_slice(&self.to_array()[..out.len()]);
+    }
+
+    /// Each lane rounded to the nearest `f32`.
+    #[inline(always)]
+    pub(crate) fn to_f32s(self) -> F32s {
+        let a = self.to_array();
+        F32s::new(std::array::from_fn(|l| a[l] as f32))
+    }
+
+    /// Each `f32` lane widened (exactly).
+    #[inline(always)]
+    pub(crate) fn from_f32s(v: F32s) -> Self {
+        let a = v.to_array();
+        Self::from_array(std::array::from_fn(|l| f64::from(a[l])))
     }
 
     /// The smallest lane.

@@ -13,6 +13,7 @@
 use std::fmt;
 
 use crate::kernel::Kernel;
+use crate::lanes::F32s;
 use crate::{F64s, KernelError};
 
 /// Most coefficients a fit may use (degree + 1).
@@ -171,6 +172,13 @@ impl Polynomial {
         }
     }
 
+    /// The coefficients of `P(t)` and of the derivative form, the number
+    /// of terms of `P` and the scale of `t` (for the single-precision copy
+    /// of a fit in `v^2`).
+    pub(crate) fn coefficients(&self) -> (&[f64; MAX_TERMS], &[f64; MAX_TERMS], usize, f64) {
+        (&self.w, &self.dw, self.terms, self.scale)
+    }
+
     /// Degree of the shape polynomial.
     pub fn degree(&self) -> usize {
         self.terms - 1
@@ -229,9 +237,11 @@ impl fmt::Debug for Polynomial {
 }
 
 /// Scalars and lanes, for the one polynomial evaluation both share (so
-/// lane `l` is the scalar result bit for bit).
-trait PolyValue: Copy {
-    fn splat(c: f64) -> Self;
+/// lane `l` is the scalar result bit for bit), in `f64` or `f32`.
+pub(crate) trait PolyValue: Copy {
+    /// The coefficients' type (the scalar of the same precision).
+    type Coef: Copy;
+    fn splat(c: Self::Coef) -> Self;
     fn mul(self, b: Self) -> Self;
     /// `self b + c`: fused where the build targets FMA (in both forms),
     /// else a multiply and an add.
@@ -239,6 +249,8 @@ trait PolyValue: Copy {
 }
 
 impl PolyValue for f64 {
+    type Coef = f64;
+
     #[inline(always)]
     fn splat(c: f64) -> Self {
         c
@@ -256,6 +268,8 @@ impl PolyValue for f64 {
 }
 
 impl PolyValue for F64s {
+    type Coef = f64;
+
     #[inline(always)]
     fn splat(c: f64) -> Self {
         F64s::splat(c)
@@ -272,6 +286,52 @@ impl PolyValue for F64s {
     }
 }
 
+impl PolyValue for f32 {
+    type Coef = f32;
+
+    #[inline(always)]
+    fn splat(c: f32) -> Self {
+        c
+    }
+
+    #[inline(always)]
+    fn mul(self, b: Self) -> Self {
+        self * b
+    }
+
+    #[inline(always)]
+    fn mul_add(self, b: Self, c: Self) -> Self {
+        if cfg!(target_feature = "fma") {
+            f32::mul_add(self, b, c)
+        } else {
+            self * b + c
+        }
+    }
+}
+
+impl PolyValue for F32s {
+    type Coef = f32;
+
+    #[inline(always)]
+    fn splat(c: f32) -> Self {
+        F32s::splat(c)
+    }
+
+    #[inline(always)]
+    fn mul(self, b: Self) -> Self {
+        self * b
+    }
+
+    #[inline(always)]
+    fn mul_add(self, b: Self, c: Self) -> Self {
+        if cfg!(target_feature = "fma") {
+            F32s::mul_add(self, b, c)
+        } else {
+            self * b + c
+        }
+    }
+}
+
 /// `sum c[k] t^k` over the first `terms` coefficients. The pair loops
 /// are latency-bound (a pair's chain from `r^2` to the sums is longer
 /// than the out-of-order window can hide, on AVX2 above all), so the
@@ -280,7 +340,7 @@ impl PolyValue for F64s {
 /// the default kernel's power form (8 and 7), by two Horner chains in
 /// `t^2` for other counts.
 #[inline(always)]
-fn poly<V: PolyValue>(c: &[f64; MAX_TERMS], terms: usize, t: V) -> V {
+pub(crate) fn poly<V: PolyValue>(c: &[V::Coef; MAX_TERMS], terms: usize, t: V) -> V {
     match terms {
         // The power form's sinc base and its derivative (each arm is
         // inlined into every kernel call of every pair loop: few arms).
@@ -294,7 +354,7 @@ fn poly<V: PolyValue>(c: &[f64; MAX_TERMS], terms: usize, t: V) -> V {
 /// those with `t^2`, with `t^4`, ... (depth `ceil(log2 N)` multiply-adds
 /// instead of `N - 1`).
 #[inline(always)]
-fn estrin<V: PolyValue, const N: usize>(c: &[f64; MAX_TERMS], t: V) -> V {
+fn estrin<V: PolyValue, const N: usize>(c: &[V::Coef; MAX_TERMS], t: V) -> V {
     let mut v: [V; N] = std::array::from_fn(|k| V::splat(c[k]));
     let (mut n, mut x) = (N, t);
     while n > 1 {
@@ -317,7 +377,7 @@ fn estrin<V: PolyValue, const N: usize>(c: &[f64; MAX_TERMS], t: V) -> V {
 /// `sum c[k] t^k` by Horner's rule in `t^2` for the even and odd halves
 /// as two independent chains, then `even + t odd`.
 #[inline(always)]
-fn horner<V: PolyValue>(c: &[f64; MAX_TERMS], terms: usize, t: V) -> V {
+fn horner<V: PolyValue>(c: &[V::Coef; MAX_TERMS], terms: usize, t: V) -> V {
     let top = terms - 1;
     if top == 0 {
         return V::splat(c[0]);

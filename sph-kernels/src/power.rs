@@ -108,7 +108,7 @@ impl PowerPolynomial {
 /// `b^e` for `e >= 1` by repeated squaring (the same products in scalar
 /// and lane forms).
 #[inline(always)]
-fn pow<V: Copy + Mul<Output = V>>(b: V, e: u32) -> V {
+pub(crate) fn pow<V: Copy + Mul<Output = V>>(b: V, e: u32) -> V {
     debug_assert!(e >= 1);
     let (mut sq, mut e) = (b, e);
     while e & 1 == 0 {

@@ -5,7 +5,9 @@
 mod common;
 
 use proptest::prelude::*;
-use sph_kernels::{FastKernel, FitVariable, Kernel, KernelChoice, KernelError, Polynomial, Sinc};
+use sph_kernels::{
+    FastKernel, FitVariable, Kernel, KernelChoice, KernelError, Polynomial, Sinc, SinglePower,
+};
 
 /// Every built-in choice, sinc with integer and non-integer exponents.
 fn any_choice() -> impl Strategy<Value = KernelChoice> {
@@ -30,7 +32,12 @@ fn scales(k: &dyn Kernel) -> (f64, f64) {
 
 #[test]
 fn the_default_kernel_is_a_power_of_a_polynomial_in_v_squared() {
-    let fast = KernelChoice::default().fast().unwrap();
+    // The solver's form is the same power evaluated in f32.
+    let solver = KernelChoice::default().fast().unwrap();
+    let FastKernel::Single(single) = &solver else {
+        panic!("the solver's sinc:6 should be S_1^6 in f32: {solver:?}");
+    };
+    let fast = FastKernel::new(&Sinc::new(6.0).unwrap()).unwrap();
     let FastKernel::Power(p) = &fast else {
         panic!("sinc:6 should be S_1^6: {fast:?}");
     };
@@ -45,6 +52,14 @@ fn the_default_kernel_is_a_power_of_a_polynomial_in_v_squared() {
     // Under half the terms of the plain fit of S_6, and within the same
     // tolerance of the exact kernel (errors relative to the scales, on a
     // grid finer than the fit's own check).
+    assert_eq!((single.power(), single.degree()), (6, p.base().degree()));
+    assert_eq!(
+        solver.describe(),
+        format!(
+            "power 6 of a polynomial of degree {} in v^2, in f32",
+            p.base().degree()
+        )
+    );
     let exact = Sinc::new(6.0).unwrap();
     let plain = Polynomial::fit(&exact, FastKernel::TOLERANCE).unwrap();
     let (base_terms, plain_terms) = (p.base().degree() + 1, plain.degree() + 1);
@@ -94,6 +109,7 @@ proptest! {
         // The table's own bound (tests/table.rs) where it is used.
         let tol = match fast {
             FastKernel::Polynomial(_) | FastKernel::Power(_) => 1.5 * FastKernel::TOLERANCE,
+            FastKernel::Single(_) => SinglePower::TOLERANCE,
             FastKernel::Table(_) => 1e-7,
         };
         prop_assert!((fw - w).abs() <= tol * sw, "{choice} v = {v}: {fw} vs {w}");
