@@ -12,7 +12,10 @@ use std::time::Duration;
 
 use criterion::measurement::WallTime;
 use criterion::{criterion_group, criterion_main, BenchmarkGroup, Criterion, Throughput};
-use sph_kernels::{CubicSpline, F64s, Kernel, Polynomial, Sinc, Tabulated, WendlandC2, LANES};
+use sph_kernels::{
+    CubicSpline, F64s, FastKernel, Kernel, Polynomial, Sinc, SinglePower, Tabulated, WendlandC2,
+    LANES,
+};
 
 const EVALUATIONS: usize = 1_000_000;
 
@@ -98,6 +101,17 @@ fn sinc6(c: &mut Criterion) {
     });
     group.bench_function("polynomial-squared-lanes", |b| {
         b.iter(|| black_box(sweep_sq_lanes(&poly, &vs)))
+    });
+    // The solver's forms: the power of the sinc base, in f64 and in f32.
+    let FastKernel::Power(power) = FastKernel::new(&exact).unwrap() else {
+        unreachable!("sinc:6 has a power form")
+    };
+    let single = SinglePower::new(&power);
+    group.bench_function("power-squared-lanes", |b| {
+        b.iter(|| black_box(sweep_sq_lanes(&power, &vs)))
+    });
+    group.bench_function("single-power-squared-lanes", |b| {
+        b.iter(|| black_box(sweep_sq_lanes(&single, &vs)))
     });
     group.finish();
 }
