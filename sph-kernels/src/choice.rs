@@ -75,14 +75,13 @@ impl KernelChoice {
         Tabulated::new(&self.exact()?, points)
     }
 
-    /// The kernel in the form the solver evaluates it: a power form in
-    /// `f32` or a polynomial where one is faithful, else the table
-    /// ([`FastKernel::single`]).
+    /// The kernel in the form the solver evaluates it: a polynomial where
+    /// one is faithful, else the table ([`FastKernel::new`]).
     ///
     /// # Errors
     /// As [`exact`](Self::exact) and [`FastKernel::new`].
     pub fn fast(&self) -> Result<FastKernel, KernelError> {
-        FastKernel::single(&self.exact()?)
+        FastKernel::new(&self.exact()?)
     }
 }
 

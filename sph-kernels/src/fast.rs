@@ -69,12 +69,16 @@ impl FastKernel {
         }
     }
 
-    /// The form the solver runs: as [`new`](Self::new), but a power form
-    /// evaluated in `f32` ([`SinglePower`], within
-    /// [`SinglePower::TOLERANCE`] of the kernel). The pair loops' sums stay
-    /// in `f64`; measured on Sedov (`std`, 50^3, 1 rank x 2 threads, AVX2)
-    /// the momentum stage takes 12-16% less time, and the L1 errors at
-    /// 30^3 and 50^3 are unchanged to 4 digits.
+    /// As [`new`](Self::new), but a power form evaluated in `f32`
+    /// ([`SinglePower`], within [`SinglePower::TOLERANCE`] of the kernel);
+    /// the pair loops' sums stay in `f64`. Faster in the pair loops
+    /// (Sedov 50^3, 1 rank x 2 threads, AVX2: momentum -8 to -16%, 80^3
+    /// -5 to -7%; Sedov L1 unchanged to 5 digits), but not the solver's
+    /// default: its rounding seeds a mode that grows from round-off in the
+    /// isobaric cube (kinetic energy e-folding every ~30 steps; the `f64`
+    /// run's seed is 1e9 times smaller and stays below it to t = 1, the
+    /// `f32` run's reaches it by t = 0.8: v_rms / c 0.0085 -> 0.0105 at 32
+    /// thin particles per side).
     ///
     /// ```
     /// use sph_kernels::{FastKernel, Kernel, Sinc, SinglePower};

@@ -32,12 +32,7 @@ fn scales(k: &dyn Kernel) -> (f64, f64) {
 
 #[test]
 fn the_default_kernel_is_a_power_of_a_polynomial_in_v_squared() {
-    // The solver's form is the same power evaluated in f32.
-    let solver = KernelChoice::default().fast().unwrap();
-    let FastKernel::Single(single) = &solver else {
-        panic!("the solver's sinc:6 should be S_1^6 in f32: {solver:?}");
-    };
-    let fast = FastKernel::new(&Sinc::new(6.0).unwrap()).unwrap();
+    let fast = KernelChoice::default().fast().unwrap();
     let FastKernel::Power(p) = &fast else {
         panic!("sinc:6 should be S_1^6: {fast:?}");
     };
@@ -52,6 +47,11 @@ fn the_default_kernel_is_a_power_of_a_polynomial_in_v_squared() {
     // Under half the terms of the plain fit of S_6, and within the same
     // tolerance of the exact kernel (errors relative to the scales, on a
     // grid finer than the fit's own check).
+    // The same power evaluated in f32.
+    let solver = FastKernel::single(&Sinc::new(6.0).unwrap()).unwrap();
+    let FastKernel::Single(single) = &solver else {
+        panic!("sinc:6 in f32 should be S_1^6: {solver:?}");
+    };
     assert_eq!((single.power(), single.degree()), (6, p.base().degree()));
     assert_eq!(
         solver.describe(),
@@ -127,6 +127,8 @@ proptest! {
         ]),
     ) {
         common::lanes_match_scalar(&choice.fast().unwrap(), v)?;
+        // And in the f32 power form where the kernel has one.
+        common::lanes_match_scalar(&FastKernel::single(&*choice.exact().unwrap()).unwrap(), v)?;
     }
 }
 
@@ -143,7 +145,7 @@ proptest! {
         choice in any_choice(),
         v in proptest::array::uniform8(0.0f64..2.2),
     ) {
-        let fast = choice.fast().unwrap();
+        for fast in [choice.fast().unwrap(), FastKernel::single(&*choice.exact().unwrap()).unwrap()] {
         let (sw, sdw) = scales(&fast);
         let lanes = sph_kernels::F64s::from_array(v);
         let v2 = lanes * lanes;
@@ -166,6 +168,7 @@ proptest! {
                 prop_assert_eq!(w_sq_only[l], 0.0);
                 prop_assert_eq!(vdw_sq[l], 0.0);
             }
+        }
         }
     }
 }
