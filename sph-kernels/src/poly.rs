@@ -248,89 +248,53 @@ pub(crate) trait PolyValue: Copy {
     fn mul_add(self, b: Self, c: Self) -> Self;
 }
 
-impl PolyValue for f64 {
-    type Coef = f64;
+/// `PolyValue` for a scalar or lane type whose `*` is element-wise: its
+/// coefficient type, how a coefficient fills it, and its multiply-add.
+macro_rules! poly_value {
+    ($t:ty, $coef:ty, $splat:expr, $mul_add:expr) => {
+        impl PolyValue for $t {
+            type Coef = $coef;
 
-    #[inline(always)]
-    fn splat(c: f64) -> Self {
-        c
-    }
+            #[inline(always)]
+            fn splat(c: $coef) -> Self {
+                $splat(c)
+            }
 
-    #[inline(always)]
-    fn mul(self, b: Self) -> Self {
-        self * b
-    }
+            #[inline(always)]
+            fn mul(self, b: Self) -> Self {
+                self * b
+            }
 
-    #[inline(always)]
-    fn mul_add(self, b: Self, c: Self) -> Self {
-        crate::lanes::mul_add(self, b, c)
-    }
-}
-
-impl PolyValue for F64s {
-    type Coef = f64;
-
-    #[inline(always)]
-    fn splat(c: f64) -> Self {
-        F64s::splat(c)
-    }
-
-    #[inline(always)]
-    fn mul(self, b: Self) -> Self {
-        self * b
-    }
-
-    #[inline(always)]
-    fn mul_add(self, b: Self, c: Self) -> Self {
-        F64s::mul_add(self, b, c)
-    }
-}
-
-impl PolyValue for f32 {
-    type Coef = f32;
-
-    #[inline(always)]
-    fn splat(c: f32) -> Self {
-        c
-    }
-
-    #[inline(always)]
-    fn mul(self, b: Self) -> Self {
-        self * b
-    }
-
-    #[inline(always)]
-    fn mul_add(self, b: Self, c: Self) -> Self {
-        if cfg!(target_feature = "fma") {
-            f32::mul_add(self, b, c)
-        } else {
-            self * b + c
+            #[inline(always)]
+            fn mul_add(self, b: Self, c: Self) -> Self {
+                $mul_add(self, b, c)
+            }
         }
-    }
+    };
 }
 
-impl PolyValue for F32s {
-    type Coef = f32;
-
-    #[inline(always)]
-    fn splat(c: f32) -> Self {
-        F32s::splat(c)
+poly_value!(f64, f64, |c| c, crate::lanes::mul_add);
+poly_value!(F64s, f64, F64s::splat, F64s::mul_add);
+poly_value!(
+    f32,
+    f32,
+    |c| c,
+    |a: f32, b, c| if cfg!(target_feature = "fma") {
+        a.mul_add(b, c)
+    } else {
+        a * b + c
     }
-
-    #[inline(always)]
-    fn mul(self, b: Self) -> Self {
-        self * b
+);
+poly_value!(
+    F32s,
+    f32,
+    F32s::splat,
+    |a: F32s, b, c| if cfg!(target_feature = "fma") {
+        a.mul_add(b, c)
+    } else {
+        a * b + c
     }
-
-    #[inline(always)]
-    fn mul_add(self, b: Self, c: Self) -> Self {
-        if cfg!(target_feature = "fma") {
-            F32s::mul_add(self, b, c)
-        } else {
-            self * b + c
-        }
-    }
-}
+);
 
 /// `sum c[k] t^k` over the first `terms` coefficients. The pair loops
 /// are latency-bound (a pair's chain from `r^2` to the sums is longer

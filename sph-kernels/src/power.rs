@@ -96,19 +96,26 @@ impl PowerPolynomial {
     /// `(b^n, n b^(n-1))` from `b`.
     #[inline(always)]
     fn raise<V: Copy + Mul<Output = V> + Mul<f64, Output = V>>(&self, b: V) -> (V, V) {
-        let below = match self.n {
-            // The default kernel's power, unrolled at compile time.
-            6 => pow(b, 5),
-            n => pow(b, n - 1),
-        };
+        let below = power_below(b, self.n);
         (below * b, below * f64::from(self.n))
+    }
+}
+
+/// `b^(n-1)` for `n >= 2`, the factor both `b^n` and `d(b^n)/db` share
+/// (in every precision and form, so they stay the same bits).
+#[inline(always)]
+pub(crate) fn power_below<V: Copy + Mul<Output = V>>(b: V, n: u32) -> V {
+    match n {
+        // The default kernel's power, unrolled at compile time.
+        6 => pow(b, 5),
+        n => pow(b, n - 1),
     }
 }
 
 /// `b^e` for `e >= 1` by repeated squaring (the same products in scalar
 /// and lane forms).
 #[inline(always)]
-pub(crate) fn pow<V: Copy + Mul<Output = V>>(b: V, e: u32) -> V {
+fn pow<V: Copy + Mul<Output = V>>(b: V, e: u32) -> V {
     debug_assert!(e >= 1);
     let (mut sq, mut e) = (b, e);
     while e & 1 == 0 {

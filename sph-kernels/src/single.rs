@@ -13,7 +13,7 @@
 use crate::kernel::Kernel;
 use crate::lanes::F32s;
 use crate::poly::{poly, PolyValue, MAX_TERMS};
-use crate::power::pow;
+use crate::power::power_below;
 use crate::{F64s, PowerPolynomial};
 use std::ops::Mul;
 
@@ -85,27 +85,8 @@ impl SinglePower {
         let t = v2.mul_add(V::splat(self.scale), V::splat(-1.0));
         let b = poly(&self.w, self.terms, t);
         let db = poly(&self.dw, self.terms - 1, t);
-        let below = match self.n {
-            // The default kernel's power, unrolled at compile time.
-            6 => pow(b, 5),
-            n => pow(b, n - 1),
-        };
+        let below = power_below(b, self.n);
         (below * b, below * db * (self.n as f32))
-    }
-
-    /// The shape alone (the same bits as [`raw`](Self::raw)'s first value).
-    #[inline(always)]
-    fn raw_shape<V>(&self, v2: V) -> V
-    where
-        V: PolyValue<Coef = f32> + Mul<Output = V>,
-    {
-        let t = v2.mul_add(V::splat(self.scale), V::splat(-1.0));
-        let b = poly(&self.w, self.terms, t);
-        let below = match self.n {
-            6 => pow(b, 5),
-            n => pow(b, n - 1),
-        };
-        below * b
     }
 
     #[inline(always)]
@@ -178,7 +159,8 @@ impl Kernel for SinglePower {
     #[inline]
     fn shape_sq(&self, v2: f64) -> f64 {
         if self.inside(v2) {
-            f64::from(self.raw_shape(v2 as f32))
+            // The derivative's polynomial is dead code here, compiled away.
+            f64::from(self.raw(v2 as f32).0)
         } else {
             0.0
         }
@@ -196,7 +178,7 @@ impl Kernel for SinglePower {
 
     #[inline(always)]
     fn shape_sq_lanes(&self, v2: F64s) -> F64s {
-        self.inside_lanes(v2, self.raw_shape(v2.to_f32s()))
+        self.inside_lanes(v2, self.raw(v2.to_f32s()).0)
     }
 
     #[inline(always)]
