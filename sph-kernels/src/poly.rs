@@ -248,10 +248,12 @@ pub(crate) trait PolyValue: Copy {
     fn mul_add(self, b: Self, c: Self) -> Self;
 }
 
-/// `PolyValue` for a scalar or lane type whose `*` is element-wise: its
-/// coefficient type, how a coefficient fills it, and its multiply-add.
+/// `PolyValue` for a scalar or lane type whose `*` is element-wise and
+/// whose inherent `mul_add` fuses: its coefficient type and how a
+/// coefficient fills it. Without the FMA instruction the multiply-add is
+/// `a * b + c` (a software-fused `mul_add` would be far slower).
 macro_rules! poly_value {
-    ($t:ty, $coef:ty, $splat:expr, $mul_add:expr) => {
+    ($t:ty, $coef:ty, $splat:expr) => {
         impl PolyValue for $t {
             type Coef = $coef;
 
@@ -267,34 +269,20 @@ macro_rules! poly_value {
 
             #[inline(always)]
             fn mul_add(self, b: Self, c: Self) -> Self {
-                $mul_add(self, b, c)
+                if cfg!(target_feature = "fma") {
+                    self.mul_add(b, c)
+                } else {
+                    self * b + c
+                }
             }
         }
     };
 }
 
-poly_value!(f64, f64, |c| c, crate::lanes::mul_add);
-poly_value!(F64s, f64, F64s::splat, F64s::mul_add);
-poly_value!(
-    f32,
-    f32,
-    |c| c,
-    |a: f32, b, c| if cfg!(target_feature = "fma") {
-        a.mul_add(b, c)
-    } else {
-        a * b + c
-    }
-);
-poly_value!(
-    F32s,
-    f32,
-    F32s::splat,
-    |a: F32s, b, c| if cfg!(target_feature = "fma") {
-        a.mul_add(b, c)
-    } else {
-        a * b + c
-    }
-);
+poly_value!(f64, f64, |c| c);
+poly_value!(F64s, f64, F64s::splat);
+poly_value!(f32, f32, |c| c);
+poly_value!(F32s, f32, F32s::splat);
 
 /// `sum c[k] t^k` over the first `terms` coefficients. The pair loops
 /// are latency-bound (a pair's chain from `r^2` to the sums is longer
