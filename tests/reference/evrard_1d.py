@@ -48,7 +48,10 @@ def run(n=2000, cfl=0.05, cq=2.0, cl=0.3, profile_at=None):
         rho = dm / vol
         c = np.sqrt(gamma * (gamma - 1) * u)
         dv = v[1:] - v[:-1]
-        q = np.where(dv < 0, cq * cq * rho * dv * dv - cl * rho * c * dv, 0.0)
+        # Viscous pressure where the shell's volume shrinks (a shell whose
+        # edges close in can still grow in volume as it moves out).
+        dvol = r[1:] ** 2 * v[1:] - r[:-1] ** 2 * v[:-1]
+        q = np.where((dv < 0) & (dvol < 0), cq * cq * rho * dv * dv - cl * rho * c * dv, 0.0)
         p = (gamma - 1) * rho * u + q
         dp = np.zeros(n + 1)
         dp[1:n] = p[1:] - p[:-1]
