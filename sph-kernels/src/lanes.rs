@@ -24,16 +24,26 @@ use wide::{f32x8, f64x8};
 /// takes two.
 pub(crate) type F32s = f32x8;
 
+/// `$a * $b + $c` through the type's inherent fused `mul_add` where the
+/// build targets FMA, else a multiply and an add (never the slow software
+/// fusion of `f64::mul_add` without the instruction): the one place that
+/// choice is made, for `f64`, `f32` and their lanes.
+macro_rules! fused_mul_add {
+    ($a:expr, $b:expr, $c:expr) => {
+        if cfg!(target_feature = "fma") {
+            $a.mul_add($b, $c)
+        } else {
+            $a * $b + $c
+        }
+    };
+}
+pub(crate) use fused_mul_add;
+
 /// `a b + c` as [`F64s::mul_add`] computes it in each lane: fused where
-/// the build targets FMA, else a multiply and an add (never the slow
-/// software fusion of `f64::mul_add` without the instruction).
+/// the build targets FMA, else a multiply and an add.
 #[inline(always)]
 pub fn mul_add(a: f64, b: f64, c: f64) -> f64 {
-    if cfg!(target_feature = "fma") {
-        a.mul_add(b, c)
-    } else {
-        a * b + c
-    }
+    fused_mul_add!(a, b, c)
 }
 
 /// One value per lane, as an array.
@@ -118,11 +128,7 @@ impl F64s {
     /// ```
     #[inline(always)]
     pub fn mul_add(self, b: Self, c: Self) -> Self {
-        if cfg!(target_feature = "fma") {
-            Self(self.0.mul_add(b.0, c.0))
-        } else {
-            self * b + c
-        }
+        Self(fused_mul_add!(self.0, b.0, c.0))
     }
 
     /// Absolute value per lane.

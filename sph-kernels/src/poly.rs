@@ -250,8 +250,8 @@ pub(crate) trait PolyValue: Copy {
 
 /// `PolyValue` for a scalar or lane type whose `*` is element-wise and
 /// whose inherent `mul_add` fuses: its coefficient type and how a
-/// coefficient fills it. Without the FMA instruction the multiply-add is
-/// `a * b + c` (a software-fused `mul_add` would be far slower).
+/// coefficient fills it; the multiply-add is
+/// [`fused_mul_add`](crate::lanes::fused_mul_add)'s.
 macro_rules! poly_value {
     ($t:ty, $coef:ty, $splat:expr) => {
         impl PolyValue for $t {
@@ -269,11 +269,7 @@ macro_rules! poly_value {
 
             #[inline(always)]
             fn mul_add(self, b: Self, c: Self) -> Self {
-                if cfg!(target_feature = "fma") {
-                    self.mul_add(b, c)
-                } else {
-                    self * b + c
-                }
+                crate::lanes::fused_mul_add!(self, b, c)
             }
         }
     };
