@@ -12,6 +12,8 @@
 //!
 //! Physics code is written once against `C: Communicator`; a serial run uses
 //! [`SerialComm`], an MPI run `MpiComm`, and nothing else differs.
+//! [`launch::mpirun`] builds the `mpirun` command that tests use to start
+//! MPI jobs (no `mpi` feature needed).
 //!
 //! ```
 //! use sph_comm::{Communicator, ExactSum, ReduceOp, SerialComm};
@@ -63,6 +65,7 @@
 mod communicator;
 mod error;
 mod exact_sum;
+pub mod launch;
 #[cfg(feature = "mpi")]
 mod mpi_comm;
 mod plain;

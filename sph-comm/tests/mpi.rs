@@ -2,14 +2,14 @@
 //!
 //! Run by `cargo test -p sph-comm --features mpi`: without arguments this
 //! binary is the launcher, which starts itself under `mpirun -n 1`, `-n 2`
-//! and `-n 4` (`--oversubscribe`, and `--allow-run-as-root` for Open MPI) with
+//! and `-n 4` (as `sph_comm::launch` builds the command) with
 //! `--mpi-child N` and checks that every run succeeds and that the reproducible
 //! sums have the same bits for every rank count. As a child it runs the
 //! checks on `MpiComm`: all-reduce, sparse exchange (random peer sets,
 //! self-sends, empty and large messages, many back-to-back rounds, a
 //! type-mismatch error), all-to-all-v, all-gather-v and `ExactSum`.
 
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 use std::time::{Duration, Instant};
 
 use sph_comm::{exact_sum, CommError, Communicator, ExactSum, MpiComm, ReduceOp};
@@ -31,24 +31,12 @@ fn main() {
 
 fn launcher() {
     let exe = std::env::current_exe().expect("own path");
-    let version = Command::new("mpirun")
-        .arg("--version")
-        .output()
-        .expect("mpirun not found: install an MPI (e.g. Debian's openmpi-bin)");
-    let version = String::from_utf8_lossy(&version.stdout).to_string()
-        + &String::from_utf8_lossy(&version.stderr);
-    let open_mpi = version.contains("Open MPI") || version.contains("OpenRTE");
+    let mpi = sph_comm::launch::Launcher::detect().unwrap_or_else(|e| panic!("{e}"));
 
     let (mut passed, mut failed) = (0, 0);
     let mut sums: Vec<(usize, String)> = Vec::new();
     for n in RANK_COUNTS {
-        let mut cmd = Command::new("mpirun");
-        cmd.arg("-n").arg(n.to_string());
-        if open_mpi {
-            cmd.args(["--oversubscribe", "--allow-run-as-root"]);
-            // Containers often forbid the cross-memory-attach copy mechanism.
-            cmd.env("OMPI_MCA_btl_vader_single_copy_mechanism", "none");
-        }
+        let mut cmd = mpi.command(n);
         cmd.arg(&exe).arg("--mpi-child").arg(n.to_string());
         cmd.stdout(Stdio::piped()).stderr(Stdio::piped());
         let start = Instant::now();
