@@ -106,3 +106,33 @@ impl AppError {
         }
     }
 }
+
+/// The folder of the unit tests' files: under the target directory, next
+/// to the test binary (unit tests have no `CARGO_TARGET_TMPDIR`), never in
+/// the user's folders or `/tmp`.
+#[cfg(test)]
+fn unit_test_root() -> std::path::PathBuf {
+    let exe = std::env::current_exe().expect("the test binary's path");
+    // target/<profile>/deps/<binary>
+    exe.parent()
+        .and_then(Path::parent)
+        .expect("the test binary is in target/<profile>/deps")
+        .join("sph-apps-unit-tests")
+}
+
+/// A fresh, empty folder `NAME` for a unit test's files (see
+/// [`unit_test_root`]).
+#[cfg(test)]
+pub(crate) fn test_dir(name: &str) -> std::path::PathBuf {
+    let dir = unit_test_root().join(name);
+    std::fs::remove_dir_all(&dir).ok();
+    std::fs::create_dir_all(&dir).expect("test folder");
+    dir
+}
+
+/// The glass cache of the unit tests (see [`unit_test_root`]): kept
+/// between runs, so a glass is relaxed once.
+#[cfg(test)]
+pub(crate) fn test_glass_dir() -> std::path::PathBuf {
+    unit_test_root().join("glass-cache")
+}

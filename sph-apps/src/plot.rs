@@ -608,13 +608,7 @@ mod tests {
     }
 
     fn temp_png(tag: &str) -> std::path::PathBuf {
-        let nanos = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0, |d| d.as_nanos());
-        std::env::temp_dir().join(format!(
-            "sph-apps-plot-{tag}-{}-{nanos}.png",
-            std::process::id()
-        ))
+        crate::test_dir(&format!("plot-{tag}")).join("plot.png")
     }
 
     #[test]

@@ -919,10 +919,7 @@ mod tests {
     /// Runs `case` for 4 steps on `ranks` in-process ranks; rank 0's
     /// summary and output folder.
     fn run(case: &str, ranks: usize) -> (Summary, std::path::PathBuf) {
-        let out = std::env::temp_dir().join(format!(
-            "sph-apps-simulation-{}-{case}-{ranks}",
-            std::process::id()
-        ));
+        let out = crate::test_dir(&format!("simulation-{case}-{ranks}"));
         let summaries = run_ranks(ranks, |comm| {
             let kernel = KernelChoice::default().fast().expect("kernel");
             let mut sim = Simulation::with_comm(scene(case), kernel, "default".into(), comm)

@@ -3,15 +3,17 @@
 //! column, bench.json with the fitted orders, and a PNG that is a real
 //! plot.
 
+mod common;
+
+use common::sphexa_command;
 use std::path::PathBuf;
-use std::process::Command;
 
 #[test]
 fn bench_writes_csv_json_and_a_real_plot() {
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("bench-sedov");
     std::fs::remove_dir_all(&out).ok();
     let reference = concat!(env!("CARGO_MANIFEST_DIR"), "/data/sphexa_cpp_sedov.csv");
-    let o = Command::new(env!("CARGO_BIN_EXE_sphexa"))
+    let o = sphexa_command()
         .args(["bench", "sedov", "--sizes", "16,20,24", "--schemes", "std"])
         .args(["--threads", "1", "--reference", reference, "-q", "--out"])
         .arg(&out)

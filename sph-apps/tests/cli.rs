@@ -2,46 +2,10 @@
 //! the value and what is allowed (never a panic); `sphexa cases` lists the
 //! registry; a tiny run writes its outputs.
 
+mod common;
+
+use common::{assert_mentions, refused, scratch, sphexa, sphexa_command};
 use std::path::PathBuf;
-use std::process::{Command, Output};
-
-fn sphexa(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sphexa"))
-        .args(args)
-        .output()
-        .expect("the sphexa binary runs")
-}
-
-/// A fresh folder for one test's files.
-fn scratch(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("cli-{name}"));
-    std::fs::remove_dir_all(&dir).ok();
-    std::fs::create_dir_all(&dir).expect("scratch folder");
-    dir
-}
-
-/// Runs `sphexa run ARGS`, expects a refusal, and returns stderr.
-fn refused(args: &[&str]) -> String {
-    let mut all = vec!["run"];
-    all.extend_from_slice(args);
-    let out = sphexa(&all);
-    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
-    assert!(
-        !out.status.success(),
-        "sphexa {all:?} succeeded; stderr: {stderr}"
-    );
-    assert!(
-        !stderr.contains("panicked"),
-        "sphexa {all:?} panicked: {stderr}"
-    );
-    stderr
-}
-
-fn assert_mentions(stderr: &str, words: &[&str]) {
-    for w in words {
-        assert!(stderr.contains(w), "stderr lacks {w:?}:\n{stderr}");
-    }
-}
 
 #[test]
 fn unknown_case_is_named_with_the_registered_cases() {
@@ -180,7 +144,7 @@ fn a_tiny_sedov_run_writes_its_outputs() {
 #[test]
 fn evrard_below_the_smallest_glass_block_runs() {
     let dir = scratch("evrard-tiny");
-    let out = Command::new(env!("CARGO_BIN_EXE_sphexa"))
+    let out = sphexa_command()
         .args(["run", "evrard", "-n", "4", "--steps", "2", "-q", "--out"])
         .arg(dir.join("out"))
         .env("SPHEXA_GLASS_DIR", dir.join("glass"))
@@ -293,7 +257,7 @@ fn a_build_without_mpi_refuses_more_than_one_rank() {
         "bench started runs before refusing"
     );
 
-    let out = Command::new(env!("CARGO_BIN_EXE_sphexa"))
+    let out = sphexa_command()
         .args(["run", "sedov", "-n", "8", "--steps", "1", "-q", "--out"])
         .arg(dir.join("launched"))
         .env("OMPI_COMM_WORLD_SIZE", "2")
@@ -315,7 +279,7 @@ fn a_wind_shock_box_too_thin_for_the_kernel_is_refused_with_the_least_size() {
 /// quietly: exit status 0, nothing on stderr, no panic.
 #[test]
 fn closed_stdout_ends_the_listing_quietly() {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_sphexa"))
+    let mut child = sphexa_command()
         .arg("cases")
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())

@@ -3,17 +3,11 @@
 //! stored to the bit and refuses a file of another spec; tiles fill a box
 //! at the asked spacing; `sphexa glass` writes what the library reads.
 
+mod common;
+
+use common::{scratch, sphexa_command};
 use proptest::prelude::*;
 use sph_apps::glass::{self, cached, relax, Glass, GlassSpec, Relaxation};
-use std::path::PathBuf;
-use std::process::Command;
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("glass-{name}"));
-    std::fs::remove_dir_all(&dir).ok();
-    std::fs::create_dir_all(&dir).expect("scratch folder");
-    dir
-}
 
 fn spec(side: usize) -> GlassSpec {
     GlassSpec {
@@ -93,7 +87,7 @@ fn the_cache_returns_what_it_stored_and_replaces_a_bad_file() {
 fn sphexa_glass_writes_a_glass_the_library_reads() {
     let dir = scratch("cli");
     let out = dir.join("g.h5");
-    let o = Command::new(env!("CARGO_BIN_EXE_sphexa"))
+    let o = sphexa_command()
         .args(["glass", "--side", "6", "--threads", "1", "-q", "--out"])
         .arg(&out)
         .output()
@@ -102,7 +96,7 @@ fn sphexa_glass_writes_a_glass_the_library_reads() {
     let g = glass::read(&out, &spec(6)).expect("a glass of that spec");
     assert!(g.report.rho_scatter <= glass::TOLERANCE, "{:?}", g.report);
 
-    let o = Command::new(env!("CARGO_BIN_EXE_sphexa"))
+    let o = sphexa_command()
         .args(["glass", "--side", "4", "--out"])
         .arg(dir.join("small.h5"))
         .output()

@@ -4,29 +4,22 @@
 //! their rank count, and give the one-rank run's L1 errors to the bit (the
 //! solver's results do not depend on the decomposition).
 
+mod common;
+
+use common::sphexa_command;
 use std::path::PathBuf;
-use std::process::Command;
 
 #[test]
 fn bench_runs_each_size_on_one_and_two_ranks() {
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("mpi-bench");
     std::fs::remove_dir_all(&out).ok();
-    let version = Command::new("mpirun").arg("--version").output();
-    let open_mpi = version.as_ref().is_ok_and(|v| {
-        let t = String::from_utf8_lossy(&v.stdout) + String::from_utf8_lossy(&v.stderr);
-        t.contains("Open MPI") || t.contains("OpenRTE")
-    });
-    let launcher = if open_mpi {
-        "mpirun --oversubscribe --allow-run-as-root"
-    } else {
-        "mpirun"
-    };
-    let o = Command::new(env!("CARGO_BIN_EXE_sphexa"))
+    let mpi = sph_comm::launch::Launcher::detect().unwrap_or_else(|e| panic!("{e}"));
+    let o = sphexa_command()
         .args(["bench", "sedov", "--sizes", "10,12", "--schemes", "std,ve"])
         .args(["--ranks", "1,2", "--threads", "1", "--end-time", "0.01"])
-        .args(["--mpirun", launcher, "-q", "--out"])
+        .args(["--mpirun", &mpi.words().join(" "), "-q", "--out"])
         .arg(&out)
-        .env("OMPI_MCA_btl_vader_single_copy_mechanism", "none")
+        .envs(mpi.env().iter().copied())
         .output()
         .expect("sphexa bench runs");
     assert!(

@@ -6,24 +6,16 @@
 //! the bit, and the snapshot written by 2 ranks holds the serial run's
 //! particles in the same order.
 
+mod common;
+
 use sph_io::{H5Part, Selection, Snapshot, SnapshotReader};
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 fn mpirun(ranks: usize, args: &[&str]) {
-    let version = Command::new("mpirun").arg("--version").output();
-    let open_mpi = version.as_ref().is_ok_and(|v| {
-        let t = String::from_utf8_lossy(&v.stdout) + String::from_utf8_lossy(&v.stderr);
-        t.contains("Open MPI") || t.contains("OpenRTE")
-    });
-    let mut c = Command::new("mpirun");
-    c.arg("-n").arg(ranks.to_string());
-    if open_mpi {
-        c.args(["--oversubscribe", "--allow-run-as-root"]);
-        c.env("OMPI_MCA_btl_vader_single_copy_mechanism", "none");
-    }
+    let mut c = sph_comm::launch::mpirun(ranks).unwrap_or_else(|e| panic!("{e}"));
+    c.env("SPHEXA_GLASS_DIR", common::glass_dir());
     c.arg(env!("CARGO_BIN_EXE_sphexa")).arg("run").args(args);
-    let out = c.output().expect("mpirun runs (install openmpi-bin)");
+    let out = c.output().expect("mpirun runs");
     assert!(
         out.status.success(),
         "mpirun -n {ranks} sphexa run {args:?} failed:\n{}\n{}",

@@ -1,14 +1,16 @@
 //! `sphexa stress --quick` (the CI subset of the suite) passes, and writes
 //! stress.json with a verdict and figures for every scenario.
 
+mod common;
+
+use common::sphexa_command;
 use std::path::PathBuf;
-use std::process::Command;
 
 #[test]
 fn the_quick_stress_suite_passes() {
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("stress-quick");
     std::fs::remove_dir_all(&out).ok();
-    let o = Command::new(env!("CARGO_BIN_EXE_sphexa"))
+    let o = sphexa_command()
         .args(["stress", "--quick", "--threads", "2", "--out"])
         .arg(&out)
         .output()

@@ -2,27 +2,12 @@
 //! quantity or the particle and the step in the message under `--strict`,
 //! and warn and record the same in summary.json without it.
 
+mod common;
+
+use common::{s, scratch, sphexa};
 use hdf5_pure::{AttrValue, FileBuilder};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn sphexa(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sphexa"))
-        .args(args)
-        .output()
-        .expect("the sphexa binary runs")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("watch-{name}"));
-    std::fs::remove_dir_all(&dir).ok();
-    std::fs::create_dir_all(&dir).expect("scratch folder");
-    dir
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
-}
+use std::process::Output;
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).to_string()

@@ -590,7 +590,19 @@ mod tests {
             };
             // 8 per side, 32 for wind-shock (its 0.25-wide box needs 28).
             let side = if case.name() == "wind-shock" { 32 } else { 8 };
-            let scene = case.setup(side, wrong).expect("set-up");
+            let layout = Layout::Glass {
+                kernel: sph_kernels::KernelChoice::default(),
+                dir: crate::test_glass_dir(),
+            };
+            let scene = case
+                .setup_share(
+                    side,
+                    wrong,
+                    &SchemeOverrides::default(),
+                    Share::WHOLE,
+                    &layout,
+                )
+                .expect("set-up");
             let mut want = HydroConfig::default();
             SchemeOverrides::default().apply(case.default_scheme(), case.physics(), &mut want);
             assert_eq!(scene.config, want, "{}", case.name());

@@ -161,10 +161,7 @@ mod tests {
     }
 
     fn dir(name: &str) -> std::path::PathBuf {
-        let d =
-            std::env::temp_dir().join(format!("sph-apps-particles-{}-{name}", std::process::id()));
-        std::fs::create_dir_all(&d).unwrap();
-        d
+        crate::test_dir(&format!("particles-{name}"))
     }
 
     #[test]
