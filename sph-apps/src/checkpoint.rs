@@ -19,6 +19,14 @@
 //!   run's resolved configuration as TOML (what `--restart` runs with).
 //!
 //! Everything is stored in full `f64`/`u64` precision, so nothing is lost.
+//!
+//! # Test hook
+//! [`PAUSE_VAR`] (`SPHEXA_TEST_PAUSE_IN_CHECKPOINT=K:DIR`) makes a run stop
+//! inside its K-th checkpoint write, with the data in `NAME.tmp` and before
+//! the rename, after creating the file [`PAUSE_MARKER`] in `DIR`: a test
+//! waits for the marker and kills the process there, certain that the kill
+//! lands during a write. It is read once per run when checkpoints are on;
+//! unset (or empty) it does nothing.
 
 use crate::output::snapshot::{self, field};
 use crate::AppError;
@@ -31,6 +39,80 @@ use std::path::{Path, PathBuf};
 
 /// Value of attribute `sphexa_kind` in checkpoints.
 pub const KIND: &str = "checkpoint";
+
+/// The environment variable of the [test hook](self#test-hook).
+pub const PAUSE_VAR: &str = "SPHEXA_TEST_PAUSE_IN_CHECKPOINT";
+
+/// The file the [test hook](self#test-hook) creates when it pauses.
+pub const PAUSE_MARKER: &str = "paused-in-checkpoint";
+
+/// Where the [test hook](self#test-hook) pauses: in the `nth` checkpoint
+/// write of the run (1 for the first), creating [`PAUSE_MARKER`] in `dir`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TestPause {
+    /// The checkpoint to pause in, counted from 1.
+    pub nth: u64,
+    /// Folder of the marker file.
+    pub dir: PathBuf,
+}
+
+impl TestPause {
+    /// The pause [`PAUSE_VAR`] asks for; `None` when it is unset or empty.
+    ///
+    /// # Errors
+    /// A value that is not `K:DIR`, named.
+    pub fn from_env() -> Result<Option<Self>, AppError> {
+        match std::env::var_os(PAUSE_VAR) {
+            Some(v) if !v.is_empty() => Self::parse(&v.to_string_lossy()).map(Some),
+            _ => Ok(None),
+        }
+    }
+
+    /// Parses `K:DIR` (K >= 1; DIR may contain `:`).
+    ///
+    /// # Errors
+    /// Another form, named with the one allowed.
+    pub fn parse(value: &str) -> Result<Self, AppError> {
+        let bad = || {
+            AppError::Usage(format!(
+                "{PAUSE_VAR}='{value}': expected K:DIR (pause in the K-th checkpoint write, K >= 1, \
+                 creating DIR/{PAUSE_MARKER}); it is a test hook, unset it for real runs"
+            ))
+        };
+        let (k, dir) = value.split_once(':').ok_or_else(bad)?;
+        let nth = k.parse::<u64>().ok().filter(|&k| k >= 1).ok_or_else(bad)?;
+        if dir.is_empty() {
+            return Err(bad());
+        }
+        Ok(TestPause {
+            nth,
+            dir: PathBuf::from(dir),
+        })
+    }
+
+    /// In checkpoint write `nth` (of file `path`): creates the marker,
+    /// naming `path`, and blocks this thread for good (the test kills the
+    /// process). Other writes return at once.
+    ///
+    /// # Errors
+    /// The marker cannot be written (the write then fails, so a broken
+    /// test set-up does not wait forever).
+    pub fn pause_if_due(&self, nth: u64, path: &Path) -> Result<(), AppError> {
+        if nth != self.nth {
+            return Ok(());
+        }
+        let marker = self.dir.join(PAUSE_MARKER);
+        // Written under another name and renamed: the test never sees a
+        // marker half written.
+        let part = self.dir.join(format!("{PAUSE_MARKER}.part"));
+        std::fs::write(&part, path.display().to_string())
+            .and_then(|()| std::fs::rename(&part, &marker))
+            .map_err(|e| AppError::io(&marker, e))?;
+        loop {
+            std::thread::park();
+        }
+    }
+}
 
 /// The checkpoint fields of particles `p` (see the [module docs](self)).
 pub fn fields(p: &Particles) -> Vec<&'static str> {
@@ -251,4 +333,36 @@ pub fn particles(
         dst.copy_from_slice(src);
     }
     Ok(p)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_test_hook_reads_k_and_a_folder_and_names_a_bad_value() {
+        assert_eq!(
+            TestPause::parse("4:/a/b:c").unwrap(),
+            TestPause {
+                nth: 4,
+                dir: PathBuf::from("/a/b:c")
+            }
+        );
+        for bad in ["4", "0:/a", "x:/a", "4:", ":/a"] {
+            let e = TestPause::parse(bad).unwrap_err().to_string();
+            assert!(
+                e.contains(PAUSE_VAR) && e.contains(&format!("'{bad}'")) && e.contains("K:DIR"),
+                "{e}"
+            );
+        }
+        // Not the checkpoint to pause in: returns at once, writes nothing.
+        let dir = crate::test_dir("pause");
+        let p = TestPause {
+            nth: 2,
+            dir: dir.clone(),
+        };
+        p.pause_if_due(1, Path::new("c.h5")).unwrap();
+        p.pause_if_due(3, Path::new("c.h5")).unwrap();
+        assert!(!dir.join(PAUSE_MARKER).exists());
+    }
 }

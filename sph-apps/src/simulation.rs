@@ -423,7 +423,7 @@ impl<C: Communicator> Simulation<C> {
             }),
             _ => None,
         };
-        let mut files = FileOutputs::new(&self.outputs, out, t0);
+        let mut files = FileOutputs::new(&self.outputs, out, t0)?;
         if files.any() && root {
             for dir in [files.snapshot_dir.as_path(), files.checkpoint_dir.as_path()] {
                 std::fs::create_dir_all(dir).map_err(|e| AppError::io(dir, e))?;
@@ -714,7 +714,11 @@ impl<C: Communicator> Simulation<C> {
         if checkpoint_due {
             let snap = checkpoint::snapshot(p, owned, state, &self.scene.bbox, &attrs);
             let path = snapfile::numbered(&files.checkpoint_dir, "checkpoint", step);
-            let seconds = snapfile::write(comm, &path, &snap)?;
+            let nth = files.summary.checkpoints + 1;
+            let pause = files.pause.as_ref();
+            let seconds = snapfile::write_then_commit(comm, &path, &snap, || {
+                pause.map_or(Ok(()), |p| p.pause_if_due(nth, &path))
+            })?;
             files.checkpoint_cost = Some(seconds);
             files.last_checkpoint = Instant::now();
             let io = &mut files.summary;
@@ -836,10 +840,12 @@ struct FileOutputs {
     checkpoint_cost: Option<f64>,
     last_checkpoint: Instant,
     summary: IoSummary,
+    /// The test hook of [`checkpoint`], if set.
+    pause: Option<checkpoint::TestPause>,
 }
 
 impl FileOutputs {
-    fn new(o: &Outputs, out: &Path, t0: f64) -> Self {
+    fn new(o: &Outputs, out: &Path, t0: f64) -> Result<Self, AppError> {
         let (every, keep) = match o.checkpoints {
             Some((e, k)) => (Some(e), k),
             None => (None, 0),
@@ -853,7 +859,11 @@ impl FileOutputs {
             let s = Schedule::new(s.every_steps, s.every_time, s.at.clone(), t0);
             (f, s)
         });
-        FileOutputs {
+        let pause = match every {
+            Some(_) => checkpoint::TestPause::from_env()?,
+            None => None,
+        };
+        Ok(FileOutputs {
             snapshots,
             snapshot_dir: out.join("snapshots"),
             checkpoint_every: every,
@@ -864,7 +874,8 @@ impl FileOutputs {
             checkpoint_cost: None,
             last_checkpoint: Instant::now(),
             summary: IoSummary::default(),
-        }
+            pause,
+        })
     }
 
     fn any(&self) -> bool {

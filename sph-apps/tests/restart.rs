@@ -3,51 +3,12 @@
 //! while writing restarts from its last complete checkpoint, a run repeats
 //! from the `config.toml` it wrote, and SPH-EXA-layout files start a case.
 
+mod common;
+
+use common::{ok, refused, s, scratch, sphexa_command};
 use sph_io::{FieldData, H5Part, Selection, Snapshot, SnapshotReader};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 use std::time::{Duration, Instant};
-
-fn sphexa(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sphexa"))
-        .args(args)
-        .output()
-        .expect("the sphexa binary runs")
-}
-
-/// Runs `sphexa run ARGS` and expects success.
-fn ok(args: &[&str]) {
-    let mut all = vec!["run"];
-    all.extend_from_slice(args);
-    let out = sphexa(&all);
-    assert!(
-        out.status.success(),
-        "sphexa {all:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
-/// Runs `sphexa run ARGS`, expects a refusal without a panic, returns stderr.
-fn refused(args: &[&str]) -> String {
-    let mut all = vec!["run"];
-    all.extend_from_slice(args);
-    let out = sphexa(&all);
-    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
-    assert!(!out.status.success(), "sphexa {all:?} succeeded");
-    assert!(!stderr.contains("panicked"), "{stderr}");
-    stderr
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("restart-{name}"));
-    std::fs::remove_dir_all(&dir).ok();
-    std::fs::create_dir_all(&dir).expect("scratch folder");
-    dir
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("UTF-8 path")
-}
 
 fn read(path: &Path) -> Snapshot {
     H5Part
@@ -131,12 +92,16 @@ fn a_restarted_run_continues_bit_identically() {
     assert!(e.contains("sedov") && e.contains("noh"), "{e}");
 }
 
-/// Kill test: a run checkpointing every step is killed with SIGKILL while a
-/// checkpoint is being written (its `.tmp` exists); the newest complete
-/// checkpoint reads back and restarts, and the restarted run gives the
-/// conserved.csv of a run that was never interrupted.
+/// Kill test: a run checkpointing every step is killed with SIGKILL inside
+/// its 4th checkpoint write, with the data in `checkpoint_00000004.h5.tmp`
+/// and before the rename (the test hook of `sph_apps::checkpoint` pauses
+/// it there and says so with a marker file); the newest complete
+/// checkpoint (step 3) reads back and restarts, and the restarted run
+/// gives the conserved.csv of a run that was never interrupted.
 #[test]
 fn a_killed_run_restarts_from_its_last_complete_checkpoint() {
+    use sph_apps::checkpoint::{PAUSE_MARKER, PAUSE_VAR};
+    const PAUSE_IN: u64 = 4;
     let dir = scratch("kill");
     let (k, u) = (dir.join("killed"), dir.join("uninterrupted"));
     let args = |out: &Path, steps: &str| -> Vec<String> {
@@ -158,10 +123,15 @@ fn a_killed_run_restarts_from_its_last_complete_checkpoint() {
         .map(str::to_owned)
         .to_vec()
     };
-    let mut child = Command::new(env!("CARGO_BIN_EXE_sphexa"))
-        .args(args(&k, "100000"))
+    let marks = dir.join("marks");
+    std::fs::create_dir_all(&marks).unwrap();
+    // 10 steps: should the hook not pause, the run ends by itself and the
+    // test fails instead of waiting.
+    let mut child = sphexa_command()
+        .args(args(&k, "10"))
+        .env(PAUSE_VAR, format!("{PAUSE_IN}:{}", s(&marks)))
         .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
         .spawn()
         .expect("sphexa starts");
     let ckdir = k.join("checkpoints");
@@ -174,34 +144,39 @@ fn a_killed_run_restarts_from_its_last_complete_checkpoint() {
         v
     };
     let start = Instant::now();
-    let mut during_write = false;
-    loop {
-        assert!(
-            start.elapsed() < Duration::from_secs(120),
-            "no checkpoint in two minutes"
-        );
-        assert!(
-            child.try_wait().unwrap().is_none(),
-            "the run ended by itself"
-        );
-        if listing(".h5").len() >= 3 {
-            if !listing(".h5.tmp").is_empty() {
-                during_write = true;
-                break;
-            }
-            if start.elapsed() > Duration::from_secs(60) {
-                break;
-            }
+    while !marks.join(PAUSE_MARKER).exists() {
+        if let Some(status) = child.try_wait().unwrap() {
+            let out = child.wait_with_output().unwrap();
+            panic!(
+                "the run ended ({status}) without pausing in checkpoint {PAUSE_IN}: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
         }
-        std::thread::yield_now();
+        if start.elapsed() > Duration::from_secs(120) {
+            child.kill().ok();
+            panic!("no pause in checkpoint {PAUSE_IN} in two minutes");
+        }
+        std::thread::sleep(Duration::from_millis(20));
     }
+    // The pause blocks the writer for good: what is on disk now is what
+    // the kill leaves.
+    let tmp_at_kill = listing(".h5.tmp");
     child.kill().expect("SIGKILL"); // std's kill is SIGKILL on Unix
     child.wait().unwrap();
-    eprintln!("killed while writing a checkpoint: {during_write}");
+    let step = PAUSE_IN - 1;
+    let name = |step: u64| format!("checkpoint_{step:08}.h5");
+    assert_eq!(
+        tmp_at_kill,
+        [ckdir.join(format!("{}.tmp", name(PAUSE_IN)))],
+        "the kill did not land during the write of checkpoint {PAUSE_IN}"
+    );
+    assert_eq!(listing(".h5.tmp"), tmp_at_kill, "the .tmp went away");
     let complete = listing(".h5");
+    assert_eq!(
+        complete,
+        (1..=step).map(|k| ckdir.join(name(k))).collect::<Vec<_>>()
+    );
     let last = complete.last().expect("a complete checkpoint").clone();
-    let name = last.file_name().unwrap().to_string_lossy().to_string();
-    let step: u64 = name["checkpoint_".len()..name.len() - 3].parse().unwrap();
     // It reads back whole (checksums verified).
     let ck = read(&last);
     assert_eq!((ck.step, ck.len()), (step, 16 * 16 * 16));

@@ -232,6 +232,18 @@ pub fn io_error(e: IoError) -> AppError {
 /// On every rank when any rank failed (each failing rank names its cause;
 /// the others say which rank failed).
 pub fn write<C: Communicator>(comm: &C, path: &Path, local: &Snapshot) -> Result<f64, AppError> {
+    write_then_commit(comm, path, local, || Ok(()))
+}
+
+/// As [`write()`], running `before_commit` on rank 0 when every rank's
+/// rows are on disk in `NAME.tmp`, before it is renamed to `NAME` (an
+/// error there fails the write on every rank).
+pub(crate) fn write_then_commit<C: Communicator>(
+    comm: &C,
+    path: &Path,
+    local: &Snapshot,
+    before_commit: impl FnOnce() -> Result<(), AppError>,
+) -> Result<f64, AppError> {
     let start = std::time::Instant::now();
     let rank = comm.rank();
     let fail = |what: &str| {
@@ -302,10 +314,10 @@ pub fn write<C: Communicator>(comm: &C, path: &Path, local: &Snapshot) -> Result
     }
     let mut committed = Ok(());
     if rank == 0 {
-        committed = slab::commit(path);
+        committed = before_commit().and_then(|()| slab::commit(path).map_err(io_error));
     }
     let failed = comm.all_reduce_scalar(u64::from(committed.is_err()), ReduceOp::Max);
-    committed.map_err(io_error)?;
+    committed?;
     if failed > 0 {
         return Err(fail("commit the file"));
     }
