@@ -238,7 +238,26 @@ pub fn load<C: Communicator>(comm: &C, spec: &str) -> Result<Loaded, AppError> {
             path.display()
         )));
     }
+    // The file's checksums hold; these are values no run writes.
+    let bad = |what: String| {
+        AppError::Usage(format!(
+            "{}: {what}; not a checkpoint a run can continue from",
+            path.display()
+        ))
+    };
+    if !rows.time.is_finite() {
+        return Err(bad(format!("its time is {}", rows.time)));
+    }
+    if !(rows.dt.is_finite() && rows.dt > 0.0) {
+        return Err(bad(format!(
+            "its last time step (minDt) is {}, not a positive number",
+            rows.dt
+        )));
+    }
     let h_next_max = match rows.attr("h_next_max") {
+        Some(Attr::F64(h)) if h.is_finite() && *h <= 0.0 => {
+            return Err(bad(format!("h_next_max is {h}, not positive")))
+        }
         Some(Attr::F64(h)) if h.is_finite() => Some(*h),
         _ => None,
     };
@@ -248,9 +267,9 @@ pub fn load<C: Communicator>(comm: &C, spec: &str) -> Result<Loaded, AppError> {
         dt_prev: rows.dt,
         h_next_max,
     };
-    let bbox = snapshot::bounding_box(&rows.bbox)?;
+    let bbox = snapshot::bounding_box(&rows.bbox).map_err(|e| bad(format!("its box: {e}")))?;
     let total = usize::try_from(total)
-        .map_err(|_| AppError::Usage(format!("{}: {total} particles", path.display())))?;
+        .map_err(|_| bad(format!("{total} particles do not fit in memory")))?;
     Ok(Loaded {
         path,
         state,
@@ -294,6 +313,16 @@ pub fn particles(
                 .join(", ")
         ))
     };
+    // Every field as long as the first: the copies below need it.
+    if let Some(f) = rows.fields.iter().find(|f| f.data.len() != n) {
+        return Err(AppError::Usage(format!(
+            "{}: field '{}' has {} values, field '{}' {n}",
+            path.display(),
+            f.name,
+            f.data.len(),
+            rows.fields[0].name
+        )));
+    }
     match rows.field("id") {
         Some(FieldData::U64(v)) => p.id.copy_from_slice(v),
         _ => return Err(missing("id")),

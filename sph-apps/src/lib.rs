@@ -26,6 +26,7 @@ pub mod analysis;
 pub mod bench;
 pub mod cases;
 pub mod checkpoint;
+pub mod config;
 pub mod glass;
 pub mod memory;
 pub mod output;

@@ -7,6 +7,7 @@ use clap::{
 };
 use sph_apps::cases::{self, FirstStep, Physics, Scheme, SchemeOverrides};
 use sph_apps::checkpoint;
+use sph_apps::config::{self, OptionKey};
 use sph_apps::output::snapshot::{self as snapfile, Schedule};
 use sph_apps::simulation::{CheckpointEvery, Outputs, Progress, Stop};
 use sph_apps::watch::{Bounds, Watch, GRAVITY_MOMENTUM_BOUND};
@@ -1122,17 +1123,8 @@ struct RunOnly {
     args: RunArgs,
 }
 
-/// One option of `sphexa run`: its configuration key (the long option
-/// without dashes; `case` for the case), clap id, and kind.
-#[derive(Debug, Clone)]
-struct OptionKey {
-    key: String,
-    id: String,
-    flag: bool,
-    positional: bool,
-}
-
-/// Every option of `sphexa run`, with its configuration key.
+/// Every option of `sphexa run`, with its configuration key (the long
+/// option without dashes; `case` for the case).
 fn option_keys() -> Vec<OptionKey> {
     RunOnly::command()
         .get_arguments()
@@ -1157,74 +1149,25 @@ const EXCLUSIVE: &[[&str; 2]] = &[
     ["restart", "init"],
 ];
 
-/// The command-line tokens of `key = value` from `source`.
-fn key_tokens(k: &OptionKey, value: &toml::Value, source: &str) -> Result<Vec<String>, AppError> {
-    let bad = |what: &str| AppError::Usage(format!("{source}: key '{}' = {value}: {what}", k.key));
-    if k.flag {
-        return match value {
-            toml::Value::Boolean(true) => Ok(vec![format!("--{}", k.key)]),
-            toml::Value::Boolean(false) => Ok(Vec::new()),
-            _ => Err(bad("must be true or false")),
-        };
-    }
-    let scalar = |v: &toml::Value| match v {
-        toml::Value::String(s) => Ok(s.clone()),
-        toml::Value::Integer(i) => Ok(i.to_string()),
-        // Display of f64 is the shortest text that parses back exactly.
-        toml::Value::Float(f) => Ok(f.to_string()),
-        toml::Value::Boolean(b) => Ok(if *b { "on" } else { "off" }.to_owned()),
-        _ => Err(bad(
-            "must be a string, a number, a boolean or a list of these",
-        )),
-    };
-    let text = match value {
-        toml::Value::Array(items) => items
-            .iter()
-            .map(scalar)
-            .collect::<Result<Vec<_>, _>>()?
-            .join(","),
-        v => scalar(v)?,
-    };
-    Ok(if k.positional {
-        vec![text]
-    } else {
-        vec![format!("--{}={text}", k.key)]
-    })
+/// The first line of a command-line error, without clap's `error: `.
+fn first_line(e: &clap::Error) -> String {
+    let msg = e.render().to_string();
+    msg.lines()
+        .next()
+        .unwrap_or("")
+        .trim_start_matches("error: ")
+        .to_owned()
 }
 
 /// Reads a configuration table from TOML `text` of `source`, refusing
 /// unknown keys (named, with the allowed keys) and values the option's own
 /// parser refuses.
 fn config_table(text: &str, source: &str, keys: &[OptionKey]) -> Result<toml::Table, AppError> {
-    let table: toml::Table = text
-        .parse()
-        .map_err(|e: toml::de::Error| AppError::Usage(format!("{source}: not valid TOML: {e}")))?;
-    for (name, value) in &table {
-        let Some(k) = keys.iter().find(|k| &k.key == name && k.key != "config") else {
-            let allowed: Vec<&str> = keys
-                .iter()
-                .map(|k| k.key.as_str())
-                .filter(|k| *k != "config")
-                .collect();
-            return Err(AppError::Usage(format!(
-                "{source}: unknown key '{name}'; allowed keys: {}",
-                allowed.join(", ")
-            )));
-        };
-        let tokens = key_tokens(k, value, source)?;
-        if let Err(e) = RunOnly::try_parse_from(&tokens) {
-            let msg = e.render().to_string();
-            let first = msg
-                .lines()
-                .next()
-                .unwrap_or("")
-                .trim_start_matches("error: ");
-            return Err(AppError::Usage(format!(
-                "{source}: key '{name}' = {value}: {first}"
-            )));
-        }
-    }
-    Ok(table)
+    config::table(text, source, keys, |tokens| {
+        RunOnly::try_parse_from(tokens)
+            .map(drop)
+            .map_err(|e| first_line(&e))
+    })
 }
 
 /// The run's options: the command line over the configuration file
@@ -1242,8 +1185,7 @@ fn layered(cli: RunArgs, m: &ArgMatches) -> Result<RunArgs, AppError> {
     let mut layers: Vec<(String, toml::Table)> = Vec::new();
     if let Some(path) = &cli.config {
         let source = path.display().to_string();
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| AppError::Usage(format!("--config {source}: cannot read it ({e})")))?;
+        let text = config::read(path)?;
         layers.push((source.clone(), config_table(&text, &source, &keys)?));
     }
     let restart = cli.restart.clone().or_else(|| {
@@ -1282,7 +1224,7 @@ fn layered(cli: RunArgs, m: &ArgMatches) -> Result<RunArgs, AppError> {
             }
             let k = keys.iter().find(|k| &k.key == name).expect("checked key");
             tokens.extend(
-                key_tokens(k, value, source)?
+                config::tokens(k, value, source)?
                     .into_iter()
                     .map(OsString::from),
             );
@@ -1297,16 +1239,7 @@ fn layered(cli: RunArgs, m: &ArgMatches) -> Result<RunArgs, AppError> {
     }
     RunOnly::try_parse_from(&tokens)
         .map(|r| r.args)
-        .map_err(|e| {
-            let msg = e.render().to_string();
-            AppError::Usage(
-                msg.lines()
-                    .next()
-                    .unwrap_or("")
-                    .trim_start_matches("error: ")
-                    .to_owned(),
-            )
-        })
+        .map_err(|e| AppError::Usage(first_line(&e)))
 }
 
 /// The fully resolved configuration of a run: every option with the value
@@ -1806,4 +1739,99 @@ fn run(a: RunArgs) -> Result<(), AppError> {
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// The resolved configuration of a Sedov run, as `sphexa run` writes
+    /// it: every key of the defaults.
+    fn resolved() -> String {
+        let a = RunOnly::try_parse_from([
+            "sedov",
+            "--checkpoint-every",
+            "3",
+            "--snapshot-at",
+            "0.1,0.2",
+        ])
+        .expect("options")
+        .args;
+        let config = HydroConfig::default();
+        let t = resolved_config(&a, "sedov", 8, Stop::Steps(5), Path::new("out"), &config);
+        toml::to_string(&t).expect("TOML")
+    }
+
+    /// What `--config hostile.toml` holding `text` gives: a table, or an
+    /// error that names the file; the table's tokens parse or are refused,
+    /// never a panic.
+    fn configure(text: &str) -> Result<(), String> {
+        let keys = option_keys();
+        let table = config_table(text, "hostile.toml", &keys).map_err(|e| e.to_string())?;
+        let mut tokens = Vec::new();
+        for (name, value) in &table {
+            let k = keys.iter().find(|k| &k.key == name).expect("checked key");
+            tokens.extend(config::tokens(k, value, "hostile.toml").map_err(|e| e.to_string())?);
+        }
+        RunOnly::try_parse_from(&tokens)
+            .map(drop)
+            .map_err(|e| format!("hostile.toml: {}", first_line(&e)))
+    }
+
+    #[test]
+    fn the_resolved_configuration_reads_back() {
+        let text = resolved();
+        assert!(
+            text.contains("case = \"sedov\"") && text.contains("checkpoint-every"),
+            "{text}"
+        );
+        configure(&text).expect("valid");
+        let e = configure("side = 0\n").unwrap_err();
+        assert!(
+            e.contains("hostile.toml") && e.contains("'side'") && e.contains("4 to 1000"),
+            "{e}"
+        );
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+        /// A changed byte or a cut in a run's configuration, checked by the
+        /// driver's own option parsers: an error naming the file, or read.
+        #[test]
+        fn a_damaged_configuration_is_refused_by_name_or_read(
+            pos in any::<prop::sample::Index>(),
+            mask in 1u8..=255,
+            keep in any::<prop::sample::Index>(),
+        ) {
+            let text = resolved();
+            let mut bytes = text.as_bytes().to_vec();
+            let i = pos.index(bytes.len());
+            bytes[i] ^= mask;
+            // Not UTF-8: config::read refuses it before any parsing.
+            if let Ok(flipped) = String::from_utf8(bytes) {
+                if let Err(e) = configure(&flipped) {
+                    prop_assert!(e.contains("hostile.toml"), "{}", e);
+                }
+            }
+            let n = keep.index(text.len() + 1);
+            if let Err(e) = configure(&text[..n]) {
+                prop_assert!(e.contains("hostile.toml"), "{}", e);
+            }
+        }
+
+        /// Random text of TOML's characters and option-like words.
+        #[test]
+        fn random_configurations_are_refused_by_name_or_read(
+            text in "(side|steps|end-time|kernel|alpha|snapshot-at|checkpoint-every|quiet|case|[a-z-]{1,8})( ?= ?)([0-9.e+-]{0,8}|\"[a-z0-9:.,-]{0,10}\"|true|false|\\[[0-9., ]{0,12}\\]|\\{\\})\n{0,2}",
+            junk in "[a-z0-9 =\"'\\[\\]{}.,#\n_+:-]{0,128}",
+        ) {
+            for t in [text.as_str(), junk.as_str()] {
+                if let Err(e) = configure(t) {
+                    prop_assert!(e.contains("hostile.toml"), "{}", e);
+                }
+            }
+        }
+    }
 }

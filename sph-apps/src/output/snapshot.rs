@@ -337,18 +337,25 @@ pub fn read_share<C: Communicator>(
     index: usize,
     select: &Selection,
 ) -> Result<(Snapshot, u64), AppError> {
-    let (r, size) = (comm.rank() as u64, comm.size() as u64);
+    let (r, size) = (
+        u128::from(comm.rank() as u64),
+        u128::from(comm.size() as u64),
+    );
     // The total first (metadata only), then this rank's rows.
-    let read = slab::read_rows(path, index, select, 0..0).and_then(|(_, n, _)| {
-        let rows = n * r / size..n * (r + 1) / size;
-        slab::read_rows(path, index, select, rows)
-    });
+    let read = slab::read_rows(path, index, select, 0..0)
+        .map_err(io_error)
+        .and_then(|(head, n, _)| {
+            check_fits(path, index, head.fields.len(), n)?;
+            // In u128: n r does not overflow (the quotients fit in u64).
+            let at = |r: u128| (u128::from(n) * r / size) as u64;
+            slab::read_rows(path, index, select, at(r)..at(r + 1)).map_err(io_error)
+        });
     let mut words = vec![u64::from(read.is_err())];
     if let Ok((_, _, checks)) = &read {
         words.extend(slab::checks_to_words(checks));
     }
     let got = comm.all_gather_v(&words)?;
-    let (snap, n, checks) = read.map_err(io_error)?;
+    let (snap, n, checks) = read?;
     let mut parts = Vec::with_capacity(comm.size());
     for k in 0..comm.size() {
         let w = got.from_rank(k);
@@ -362,6 +369,25 @@ pub fn read_share<C: Communicator>(
     }
     slab::verify(path, index, &parts).map_err(io_error)?;
     Ok((snap, n))
+}
+
+/// Refuses step group `index` of `path` when its `n` rows of `fields`
+/// 8-byte fields need more bytes than the file holds (a damaged or forged
+/// count), before anything is allocated for them.
+fn check_fits(path: &Path, index: usize, fields: usize, n: u64) -> Result<(), AppError> {
+    let len = std::fs::metadata(path)
+        .map_err(|e| AppError::io(path, e))?
+        .len();
+    let need = n.checked_mul(8).and_then(|b| b.checked_mul(fields as u64));
+    if need.is_some_and(|b| b <= len) {
+        return Ok(());
+    }
+    Err(AppError::Usage(format!(
+        "{}: Step#{index} claims {n} particles, {} bytes of values in its {fields} fields, \
+         but the file holds {len} bytes (truncated or damaged)",
+        path.display(),
+        need.map_or("more than 2^64".to_string(), |b| b.to_string()),
+    )))
 }
 
 /// `DIR/NAME_SSSSSSSS.h5` for step `step`.
