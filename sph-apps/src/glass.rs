@@ -12,9 +12,11 @@
 //! `std(rho) / mean(rho)` falls below the tolerance or at the step limit.
 //!
 //! [`cached`] keeps every glass in a folder under a name made of
-//! `(side, kernel, ng0, ngmax)`, checksummed (`sph-io`), so a glass is
-//! relaxed once and reused. [`Glass::fill`] tiles a box with copies of a
-//! block scaled to a given mean spacing.
+//! `(side, kernel, ng0, ngmax)` and [`RELAXATION_VERSION`], checksummed
+//! (`sph-io`), so a glass is relaxed once and reused, and a glass of an
+//! older relaxation is never taken for one of the current.
+//! [`Glass::fill`] tiles a box with copies of a block scaled to a given
+//! mean spacing.
 //!
 //! ```
 //! use sph_apps::glass::{relax, GlassSpec};
@@ -55,6 +57,15 @@ pub const MAX_SHIFT: f64 = 0.2;
 /// (the moves overshoot and oscillate).
 pub const KAPPA: f64 = 0.2;
 
+/// Version of the relaxation: part of a cached glass's file name and
+/// attributes, and [`read`] refuses a glass of another version, so a change
+/// to the relaxation never reuses a glass made by the old one. Bump it with
+/// every change that moves a relaxed particle by one bit (this module, the
+/// solver steps it runs, the kernels); the unit test
+/// `relaxed_glass_matches_its_version` records the positions' checksum per
+/// version and fails until it is bumped.
+pub const RELAXATION_VERSION: u32 = 1;
+
 /// What a glass is made for: its particle count and the kernel and
 /// neighbour counts of the runs that use it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -83,9 +94,10 @@ impl Default for GlassSpec {
 }
 
 impl GlassSpec {
-    /// The cache file's name, e.g. `glass_16_sinc6_ng100_150.h5`; a
-    /// decimal point in the kernel's exponent becomes `p` (`sinc:6.5` is
-    /// `sinc6p5`, not the `sinc65` of `sinc:65`).
+    /// The cache file's name, e.g. `glass_16_sinc6_ng100_150_v1.h5` (the
+    /// last part is [`RELAXATION_VERSION`]); a decimal point in the
+    /// kernel's exponent becomes `p` (`sinc:6.5` is `sinc6p5`, not the
+    /// `sinc65` of `sinc:65`).
     pub fn file_name(&self) -> String {
         let kernel: String = self
             .kernel
@@ -98,7 +110,7 @@ impl GlassSpec {
             })
             .collect();
         format!(
-            "glass_{}_{kernel}_ng{}_{}.h5",
+            "glass_{}_{kernel}_ng{}_{}_v{RELAXATION_VERSION}.h5",
             self.side, self.ng0, self.ngmax
         )
     }
@@ -184,7 +196,9 @@ impl Glass {
 
 /// The cache folder: `$SPHEXA_GLASS_DIR`, else
 /// `$XDG_CACHE_HOME/sphexa/glass`, else `$HOME/.cache/sphexa/glass`, else
-/// `glass/` under the working directory.
+/// `glass/` under the working directory (where the user sees it; a shared
+/// folder such as `/tmp` could hold another user's files; the repository
+/// ignores `/glass/`).
 pub fn default_cache_dir() -> PathBuf {
     let var = |k: &str| {
         std::env::var_os(k)
@@ -339,12 +353,17 @@ pub const TOLERANCE: f64 = 0.005;
 /// Most steps [`cached`] relaxes.
 pub const MAX_STEPS: u64 = 1000;
 
-/// Writes `glass` as one H5Part step (`x`, `y`, `z`; the spec and the
-/// relaxation as attributes).
+/// Writes `glass` as one H5Part step (`x`, `y`, `z`; the spec, the
+/// relaxation's figures and [`RELAXATION_VERSION`] as attributes).
 ///
 /// # Errors
 /// The file cannot be written.
 pub fn write(glass: &Glass, path: &Path) -> Result<(), AppError> {
+    write_version(glass, path, RELAXATION_VERSION)
+}
+
+/// [`write()`] with the relaxation version `version`.
+fn write_version(glass: &Glass, path: &Path, version: u32) -> Result<(), AppError> {
     let bbox = BoxSpec {
         lo: [0.0; 3],
         hi: [1.0; 3],
@@ -359,7 +378,8 @@ pub fn write(glass: &Glass, path: &Path) -> Result<(), AppError> {
         .set_attr("rho_scatter_start", Attr::F64(r.rho_scatter_start))
         .set_attr("rho_scatter", Attr::F64(r.rho_scatter))
         .set_attr("min_pair_start", Attr::F64(r.min_pair_start))
-        .set_attr("min_pair", Attr::F64(r.min_pair));
+        .set_attr("min_pair", Attr::F64(r.min_pair))
+        .set_attr("relaxation_version", Attr::I64(i64::from(version)));
     for (k, name) in ["x", "y", "z"].iter().enumerate() {
         s.set_field(
             name,
@@ -370,10 +390,12 @@ pub fn write(glass: &Glass, path: &Path) -> Result<(), AppError> {
     Ok(())
 }
 
-/// Reads a glass written by [`write()`], checking that it is one of `spec`.
+/// Reads a glass written by [`write()`], checking that it is one of `spec`
+/// made by this [`RELAXATION_VERSION`].
 ///
 /// # Errors
-/// An unreadable or corrupted file, or a glass of another spec.
+/// An unreadable or corrupted file, or a glass of another spec or
+/// relaxation version.
 pub fn read(path: &Path, spec: &GlassSpec) -> Result<Glass, AppError> {
     let s = H5Part.read_step(path, 0, &Selection::All)?;
     let bad = |what: &str| {
@@ -394,6 +416,16 @@ pub fn read(path: &Path, spec: &GlassSpec) -> Result<Glass, AppError> {
         Some(Attr::F64(v)) => Ok(*v),
         _ => Err(bad(&format!("no attribute {k}"))),
     };
+    let version = match s.attr("relaxation_version") {
+        Some(Attr::I64(v)) => Some(*v),
+        _ => None,
+    };
+    if version != Some(i64::from(RELAXATION_VERSION)) {
+        return Err(bad(&format!(
+            "relaxation version {}, this build relaxes version {RELAXATION_VERSION}",
+            version.map_or("none".to_string(), |v| v.to_string())
+        )));
+    }
     let kernel = match s.attr("kernel") {
         Some(Attr::Str(k)) => k.clone(),
         _ => return Err(bad("no attribute kernel")),
@@ -473,4 +505,108 @@ fn closest_pair(p: &Particles, range: std::ops::Range<usize>, side: usize) -> f6
         }
     }
     best.sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// FNV-1a (64 bits) of `bytes` from `h`: a stable hash (std's
+    /// `DefaultHasher` may change between Rust versions).
+    fn fnv1a(mut h: u64, bytes: &[u8]) -> u64 {
+        for &b in bytes {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+        h
+    }
+
+    const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+
+    /// The positions' bits, in order.
+    fn checksum(pos: &[[f64; 3]]) -> u64 {
+        pos.iter()
+            .flatten()
+            .fold(FNV_OFFSET, |h, v| fnv1a(h, &v.to_bits().to_le_bytes()))
+    }
+
+    /// Steps of the checked relaxation.
+    const CHECK_STEPS: u64 = 40;
+
+    /// `(RELAXATION_VERSION, built with FMA, checksum)` of the 8^3 glass
+    /// after [`CHECK_STEPS`] steps. A build that targets FMA fuses the
+    /// kernels' multiply-adds (`sph_kernels::lanes::mul_add`), which
+    /// changes the last bits, so each version has one checksum per setting
+    /// (`RUSTFLAGS="-C target-cpu=x86-64"` builds without FMA).
+    const RELAXED_CHECKSUMS: &[(u32, bool, u64)] = &[
+        (1, true, 0x97d5_b849_8e5a_fce2),
+        (1, false, 0xac77_5240_d680_0129),
+    ];
+
+    /// Guards [`RELAXATION_VERSION`]: relaxes 8^3 particles for
+    /// [`CHECK_STEPS`] steps (tolerance 0, so always that many) and compares
+    /// the checksum of the positions with the one recorded for this version
+    /// and FMA setting; a change to the relaxation fails here until the
+    /// version is bumped and the new checksums are recorded.
+    #[test]
+    fn relaxed_glass_matches_its_version() {
+        assert_eq!(fnv1a(FNV_OFFSET, b"a"), 0xaf63_dc4c_8601_ec8c, "FNV-1a");
+        let spec = GlassSpec {
+            side: 8,
+            ..GlassSpec::default()
+        };
+        let g = relax(&spec, CHECK_STEPS, 0.0, |_| {}).expect("relaxes");
+        assert_eq!(g.report.steps, CHECK_STEPS);
+        let got = checksum(&g.pos);
+        let fma = cfg!(target_feature = "fma");
+        let recorded = RELAXED_CHECKSUMS
+            .iter()
+            .find(|&&(v, f, _)| v == RELAXATION_VERSION && f == fma)
+            .map(|&(_, _, c)| c);
+        let shown = recorded.map_or("none".to_string(), |c| format!("{c:#018x}"));
+        assert!(
+            recorded == Some(got),
+            "the relaxed 8^3 glass has checksum {got:#018x} (FMA {fma}), but RELAXED_CHECKSUMS \
+             records {shown} for RELAXATION_VERSION {RELAXATION_VERSION}: the relaxation \
+             changed. Bump RELAXATION_VERSION and record the new checksum, for builds with and \
+             without FMA (RUSTFLAGS=\"-C target-cpu=x86-64\" cargo test -p sph-apps --lib glass)"
+        );
+    }
+
+    #[test]
+    fn a_glass_of_another_relaxation_version_is_refused_and_replaced() {
+        let dir = crate::test_dir("glass-version");
+        let spec = GlassSpec {
+            side: MIN_SIDE,
+            ..GlassSpec::default()
+        };
+        assert!(spec
+            .file_name()
+            .ends_with(&format!("_v{RELAXATION_VERSION}.h5")));
+        let glass = Glass {
+            spec,
+            pos: vec![[0.5; 3]; MIN_SIDE.pow(3)],
+            report: Relaxation {
+                steps: 0,
+                rho_scatter_start: 0.0,
+                rho_scatter: 0.0,
+                min_pair_start: 0.0,
+                min_pair: 0.0,
+            },
+        };
+        let path = dir.join(spec.file_name());
+        write(&glass, &path).expect("written");
+        assert_eq!(read(&path, &spec).expect("read back"), glass);
+        write_version(&glass, &path, RELAXATION_VERSION + 1).expect("written");
+        let e = read(&path, &spec).expect_err("another version").to_string();
+        assert!(
+            e.contains(&spec.file_name())
+                && e.contains(&format!("relaxation version {}", RELAXATION_VERSION + 1)),
+            "{e}"
+        );
+        // The cache relaxes a glass of this version in its place.
+        let fresh = cached(&spec, &dir).expect("relaxed");
+        assert_ne!(fresh.pos, glass.pos);
+        assert_eq!(read(&path, &spec).expect("now this version"), fresh);
+    }
 }

@@ -100,7 +100,8 @@ struct GlassArgs {
     #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = parse_threads)]
     threads: Option<usize>,
     /// Output file (default: the cache's file for this side, kernel and
-    /// neighbour counts, e.g. glass/glass_16_sinc6_ng100_150.h5).
+    /// neighbour counts and relaxation version, e.g.
+    /// glass_16_sinc6_ng100_150_v1.h5).
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
     /// No line per 10 steps.
