@@ -1,8 +1,43 @@
 //! Shared helpers and proptest strategies.
 #![allow(dead_code)]
 
+use hdf5_pure::{AttrValue, FileBuilder};
 use proptest::prelude::*;
 use sph_io::{Attr, BoxSpec, Field, FieldData, Snapshot};
+
+/// A file in SPH-EXA's H5Part layout (no checksums, no field table, `f32`
+/// fields, integer ids, attributes named as SPH-EXA names them), built with
+/// the HDF5 encoder directly: steps 0 and 1 of `n` particles with fields
+/// `x` (f64), `h` (f32) and `id` (u64).
+pub fn sphexa_bytes(n: usize) -> Vec<u8> {
+    let mut b = FileBuilder::new();
+    b.set_attr("numParticlesGlobal", AttrValue::U64(n as u64));
+    for k in 0..2 {
+        let mut g = b.create_group(&format!("Step#{k}"));
+        g.set_attr("time", AttrValue::F64(0.25 + k as f64));
+        g.set_attr("iteration", AttrValue::I64(10 + k as i64));
+        g.set_attr("minDt", AttrValue::F64(1e-3));
+        g.set_attr(
+            "box",
+            AttrValue::F64Array(vec![-1.0, 1.0, -2.0, 2.0, -3.0, 3.0]),
+        );
+        let x: Vec<f64> = (0..n).map(|i| i as f64 / n as f64 + k as f64).collect();
+        g.create_dataset("x").with_f64_data(&x);
+        let h: Vec<f32> = (0..n).map(|i| 0.5 + i as f32 / 8.0).collect();
+        g.create_dataset("h").with_f32_data(&h);
+        let id: Vec<u64> = (0..n as u64).map(|i| 100 + i).collect();
+        g.create_dataset("id").with_u64_data(&id);
+        b.add_group(g.finish());
+    }
+    b.finish().unwrap()
+}
+
+/// `name` in a directory of this crate's tests under the target directory.
+pub fn scratch_path(name: &str) -> std::path::PathBuf {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("sph-io-tests");
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
 
 /// Any `f64` bit pattern (NaNs with payloads, infinities, -0.0, subnormals).
 pub fn any_f64() -> impl Strategy<Value = f64> {
