@@ -67,12 +67,7 @@ pub fn read_foreign_rows(
     rows: Range<u64>,
 ) -> Result<ForeignStep, IoError> {
     let file = h5part::open(path)?;
-    let file_len = std::fs::metadata(path)
-        .map_err(|source| IoError::Io {
-            path: path.to_owned(),
-            source,
-        })?
-        .len();
+    let file_len = h5part::file_len(path)?;
     let count = h5part::count_steps(path, &file)?;
     let gname = step_group(index);
     if index >= count {
@@ -131,24 +126,14 @@ pub fn read_foreign_rows(
                 })
             }
         };
-        // Every value must be stored somewhere in the file (no compression
-        // filters are built in, so each takes its full size): a count beyond
-        // that is corruption, refused before the decoder (which fills
-        // unallocated storage) or a caller (which sizes arrays by `total`)
-        // allocates for it.
+        // Every value must be stored somewhere in the file: a count beyond
+        // that is refused before the decoder (which fills unallocated
+        // storage) or a caller (which sizes arrays by `total`) allocates
+        // for it.
         let size = h5part::guard(path, at.0, at.1, || {
             Ok(ds.datatype()?.element_size()?.get())
         })?;
-        if n.checked_mul(u64::from(size)).is_none_or(|b| b > file_len) {
-            return Err(IoError::BeyondFile {
-                path: path.to_owned(),
-                step: gname,
-                field: name.to_owned(),
-                count: n,
-                size,
-                file_len,
-            });
-        }
+        h5part::check_claim(path, &gname, name, n, size, file_len)?;
         let expected = *total.get_or_insert(n);
         if n != expected {
             return Err(IoError::WrongLength {

@@ -93,60 +93,6 @@ fn every_bit_flip_is_an_error_or_consistent() {
     }
 }
 
-/// Lookup3 (`hashlittle`, initial value 0): the checksum of HDF5's
-/// version-2 object headers, to re-seal a header after patching it.
-fn lookup3(data: &[u8]) -> u32 {
-    let word = |b: &[u8]| u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
-    let mut a = 0xdead_beef_u32.wrapping_add(data.len() as u32);
-    let (mut b, mut c) = (a, a);
-    let mut rest = data;
-    while rest.len() > 12 {
-        a = a.wrapping_add(word(&rest[0..]));
-        b = b.wrapping_add(word(&rest[4..]));
-        c = c.wrapping_add(word(&rest[8..]));
-        // mix(a, b, c)
-        a = a.wrapping_sub(c) ^ c.rotate_left(4);
-        c = c.wrapping_add(b);
-        b = b.wrapping_sub(a) ^ a.rotate_left(6);
-        a = a.wrapping_add(c);
-        c = c.wrapping_sub(b) ^ b.rotate_left(8);
-        b = b.wrapping_add(a);
-        a = a.wrapping_sub(c) ^ c.rotate_left(16);
-        c = c.wrapping_add(b);
-        b = b.wrapping_sub(a) ^ a.rotate_left(19);
-        a = a.wrapping_add(c);
-        c = c.wrapping_sub(b) ^ b.rotate_left(4);
-        b = b.wrapping_add(a);
-        rest = &rest[12..];
-    }
-    if rest.is_empty() {
-        return c;
-    }
-    let mut tail = [0u8; 12];
-    tail[..rest.len()].copy_from_slice(rest);
-    a = a.wrapping_add(word(&tail[0..]));
-    b = b.wrapping_add(word(&tail[4..]));
-    c = c.wrapping_add(word(&tail[8..]));
-    // final(a, b, c)
-    c = (c ^ b).wrapping_sub(b.rotate_left(14));
-    a = (a ^ c).wrapping_sub(c.rotate_left(11));
-    b = (b ^ a).wrapping_sub(a.rotate_left(25));
-    c = (c ^ b).wrapping_sub(b.rotate_left(16));
-    a = (a ^ c).wrapping_sub(c.rotate_left(4));
-    b = (b ^ a).wrapping_sub(a.rotate_left(14));
-    c = (c ^ b).wrapping_sub(b.rotate_left(24));
-    c
-}
-
-/// The one position of `needle` in `hay`.
-fn find_unique(hay: &[u8], needle: &[u8]) -> usize {
-    let hits: Vec<usize> = (0..=hay.len() - needle.len())
-        .filter(|&i| hay[i..].starts_with(needle))
-        .collect();
-    assert_eq!(hits.len(), 1, "{needle:?} at {hits:?}");
-    hits[0]
-}
-
 /// A valid HDF5 file whose dataset `Step#0/x` (f64) claims `count` values
 /// with no storage allocated, as libhdf5 writes a dataset never written to:
 /// a reader that trusts the count fills `8 * count` bytes with the fill
@@ -158,45 +104,7 @@ fn claims_values(count: u64) -> Vec<u8> {
     g.create_dataset("x").with_f64_data(&[0.5; 7]);
     b.add_group(g.finish());
     let mut f = b.finish().unwrap();
-    // Dataspace message (version 2): version, rank 1, flags 0, simple, dims[0] = 7.
-    let mut space = vec![2, 1, 0, 1];
-    space.extend(7u64.to_le_bytes());
-    let dims = find_unique(&f, &space) + 4;
-    // Layout message (version 3 or 4), contiguous: address, then size 56.
-    let layouts: Vec<usize> = (0..f.len() - 18)
-        .filter(|&i| {
-            matches!(f[i], 3 | 4) && f[i + 1] == 1 && f[i + 10..i + 18] == 56u64.to_le_bytes()
-        })
-        .collect();
-    assert_eq!(layouts.len(), 1, "layout messages at {layouts:?}");
-    let layout = layouts[0];
-    // The object header holding them: "OHDR", version, flags, optional
-    // times (flag 0x20) and attribute thresholds (0x10), the size of chunk 0
-    // in 1 << (flags & 3) bytes, the messages, then the checksum.
-    let start = (0..dims)
-        .rev()
-        .find(|&i| f[i..].starts_with(b"OHDR"))
-        .unwrap();
-    let flags = f[start + 5];
-    let mut at = start + 6;
-    at += if flags & 0x20 != 0 { 16 } else { 0 };
-    at += if flags & 0x10 != 0 { 4 } else { 0 };
-    let width = 1usize << (flags & 3);
-    let mut size = [0u8; 8];
-    size[..width].copy_from_slice(&f[at..at + width]);
-    let end = at + width + u64::from_le_bytes(size) as usize;
-    assert!(layout < end, "layout outside the header");
-    let stored = |f: &[u8]| u32::from_le_bytes(f[end..end + 4].try_into().unwrap());
-    assert_eq!(
-        lookup3(&f[start..end]),
-        stored(&f),
-        "lookup3 over the header as parsed is not its stored checksum"
-    );
-    f[dims..dims + 8].copy_from_slice(&count.to_le_bytes());
-    f[layout + 2..layout + 10].fill(0xff); // undefined address: never allocated
-    f[layout + 10..layout + 18].copy_from_slice(&count.wrapping_mul(8).to_le_bytes());
-    let sum = lookup3(&f[start..end]);
-    f[end..end + 4].copy_from_slice(&sum.to_le_bytes());
+    common::claim_count(&mut f, 7, count);
     f
 }
 
