@@ -71,6 +71,26 @@ pub enum IoError {
         /// The field's length on disk.
         found: u64,
     },
+    /// A dataset claims more values than the file has bytes for: a corrupt
+    /// or hostile count, refused before anything is allocated for it.
+    #[error(
+        "{}: {step}: field '{field}' claims {count} values of {size} bytes, more than the file's {file_len} bytes",
+        path.display()
+    )]
+    BeyondFile {
+        /// The file.
+        path: PathBuf,
+        /// The step group.
+        step: String,
+        /// The field.
+        field: String,
+        /// The number of values the dataset's shape claims.
+        count: u64,
+        /// Bytes per value on disk.
+        size: u32,
+        /// The file's length in bytes.
+        file_len: u64,
+    },
     /// A field's element type on disk is not the one recorded for it (or not
     /// one this crate reads).
     #[error("{}: {step}: field '{field}' is of type {found}, expected {expected}", path.display())]

@@ -57,8 +57,8 @@ pub fn step_count(path: &Path) -> Result<usize, IoError> {
 ///
 /// # Errors
 /// A missing step or required field, a field that is not 1-D or not of the
-/// first field's length, or undecodable data, each naming file, step and
-/// field.
+/// first field's length, a field claiming more values than the file has
+/// bytes for, or undecodable data, each naming file, step and field.
 pub fn read_foreign_rows(
     path: &Path,
     index: usize,
@@ -67,6 +67,7 @@ pub fn read_foreign_rows(
     rows: Range<u64>,
 ) -> Result<ForeignStep, IoError> {
     let file = h5part::open(path)?;
+    let file_len = h5part::file_len(path)?;
     let count = h5part::count_steps(path, &file)?;
     let gname = step_group(index);
     if index >= count {
@@ -125,6 +126,14 @@ pub fn read_foreign_rows(
                 })
             }
         };
+        // Every value must be stored somewhere in the file: a count beyond
+        // that is refused before the decoder (which fills unallocated
+        // storage) or a caller (which sizes arrays by `total`) allocates
+        // for it.
+        let size = h5part::guard(path, at.0, at.1, || {
+            Ok(ds.datatype()?.element_size()?.get())
+        })?;
+        h5part::check_claim(path, &gname, name, n, size, file_len)?;
         let expected = *total.get_or_insert(n);
         if n != expected {
             return Err(IoError::WrongLength {

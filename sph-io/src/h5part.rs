@@ -24,7 +24,11 @@
 //! Each dataset carries an attribute `crc32` (u32): the CRC32 of its values
 //! as little-endian bytes. A reader checks the metadata checksum of the step
 //! and the checksum of every field it reads, so any change to a value, a
-//! name, a type or a length is reported, never returned.
+//! name, a type or a length is reported, never returned. CRC32s detect
+//! damage, not forgery: a particle count rewritten with its checksums
+//! recomputed passes them, so a field claiming more values than the file
+//! has bytes for is refused ([`IoError::BeyondFile`]) before anything is
+//! allocated for it.
 //!
 //! Files are written to `NAME.tmp`, flushed to disk, then renamed to `NAME`:
 //! a crash leaves either the old file or the new one, never a torn one.
@@ -656,9 +660,55 @@ fn read_group(path: &Path, file: &File, k: usize, select: &Selection) -> Result<
     }
     Ok(snap)
 }
+
+/// The length of file `path` in bytes.
+pub(crate) fn file_len(path: &Path) -> Result<u64, IoError> {
+    std::fs::metadata(path)
+        .map(|m| m.len())
+        .map_err(|source| IoError::Io {
+            path: path.to_owned(),
+            source,
+        })
+}
+
+/// Refuses field `field` of step group `step` claiming `count` values of
+/// `size` bytes each when they cannot all be stored in the file's
+/// `file_len` bytes ([`IoError::BeyondFile`]). No compression filters are
+/// built in, so every value takes its full size in the file: a larger
+/// count is corruption or a forged file (a count rewritten, with any
+/// checksum over it recomputed), refused before a reader or a caller
+/// allocates for it.
+pub(crate) fn check_claim(
+    path: &Path,
+    step: &str,
+    field: &str,
+    count: u64,
+    size: u32,
+    file_len: u64,
+) -> Result<(), IoError> {
+    if count
+        .checked_mul(u64::from(size))
+        .is_none_or(|bytes| bytes > file_len)
+    {
+        return Err(IoError::BeyondFile {
+            path: path.to_owned(),
+            step: step.to_owned(),
+            field: field.to_owned(),
+            count,
+            size,
+            file_len,
+        });
+    }
+    Ok(())
+}
+
 /// Reads `rows` of field `name` (of type `t`, `n` values) of step group
 /// `g`: the values, the CRC32 of the rows read, and the field's stored CRC32
 /// (of all `n` values). The caller compares the checksums.
+///
+/// `n` comes from the step's metadata; a field claiming more values than
+/// the file has bytes for is refused ([`IoError::BeyondFile`]) before
+/// anything is allocated for it.
 pub(crate) fn read_field(
     path: &Path,
     gname: &str,
@@ -704,6 +754,9 @@ pub(crate) fn read_field(
             found: shape.iter().product(),
         });
     }
+    let datatype = guard(path, at.0, at.1, || ds.datatype())?;
+    let size = guard(path, at.0, at.1, || Ok(datatype.element_size()?.get()))?;
+    check_claim(path, gname, name, n, size, file_len(path)?)?;
     let stored = match guard(path, at.0, at.1, || ds.attrs())?.remove(A_CRC) {
         Some(AttrValue::U32(c)) => c,
         _ => {
@@ -720,7 +773,7 @@ pub(crate) fn read_field(
     // window is in cache; anything else goes through the decoder's
     // conversions.
     let little_endian = matches!(
-        guard(path, at.0, at.1, || ds.datatype())?,
+        datatype,
         Datatype::FloatingPoint {
             size: 8,
             byte_order: DatatypeByteOrder::LittleEndian,

@@ -287,7 +287,9 @@ fn read_group(
 }
 
 /// Reads field `name` (of type `t`, `n` values) of step group `g` and checks
-/// it against its stored CRC32.
+/// it against its stored CRC32; a field claiming more values than the file
+/// has bytes for is refused ([`IoError::BeyondFile`]) before anything is
+/// allocated for it.
 fn read_field(
     path: &Path,
     gname: &str,
@@ -330,6 +332,10 @@ fn read_field(
             found: shape.iter().product::<usize>() as u64,
         });
     }
+    // `read_raw` allocates for the whole shape before libhdf5 reads a byte:
+    // a count beyond the file (values of 8 bytes, the types just checked)
+    // is refused first.
+    h5part::check_claim(path, gname, name, n, 8, h5part::file_len(path)?)?;
     let stored = match ds.attr(A_CRC).and_then(|a| {
         let d = a.dtype()?.to_descriptor()?;
         if d == TypeDescriptor::Unsigned(IntSize::U4) && a.is_scalar() {

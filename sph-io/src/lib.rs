@@ -50,8 +50,11 @@
 //! ```
 //! use sph_io::{Attr, BoxSpec, FieldData, H5Part, Selection, Snapshot, SnapshotReader, SnapshotWriter};
 //!
-//! let dir = std::env::temp_dir().join(format!("sph-io-doc-{}", std::process::id()));
-//! std::fs::create_dir_all(&dir)?;
+//! # // A scratch directory under the workspace's target directory (doc tests
+//! # // get no CARGO_TARGET_TMPDIR), removed at the end.
+//! # let dir = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../target/tmp"))
+//! #     .join(format!("sph-io-doc-{}", std::process::id()));
+//! # std::fs::create_dir_all(&dir)?;
 //! let path = dir.join("sedov.h5");
 //!
 //! let bbox = BoxSpec { lo: [-0.5; 3], hi: [0.5; 3], periodic: [true; 3] };

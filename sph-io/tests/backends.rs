@@ -36,7 +36,7 @@ proptest! {
     fn each_backend_reads_the_other_bitwise(
         snaps in prop::collection::vec(common::snapshot(5, 40), 1..3),
     ) {
-        let dir = tempfile::tempdir().unwrap();
+        let dir = common::scratch_dir();
         let refs: Vec<&Snapshot> = snaps.iter().collect();
         for writer in ["c", "pure"] {
             let path = dir.path().join(format!("{writer}.h5"));
@@ -56,7 +56,7 @@ proptest! {
     /// Appends alternate between the backends on one file.
     #[test]
     fn appends_mix_backends(snaps in prop::collection::vec(common::snapshot(3, 20), 1..5)) {
-        let dir = tempfile::tempdir().unwrap();
+        let dir = common::scratch_dir();
         let path = dir.path().join("mixed.h5");
         for (k, s) in snaps.iter().enumerate() {
             let got = if k % 2 == 0 {
@@ -78,7 +78,7 @@ proptest! {
 
 #[test]
 fn selections_and_step_counts_agree() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     let path = dir.path().join("s.h5");
     let (a, b) = (common::sample(100), common::sample(7));
     H5PartC
@@ -108,7 +108,7 @@ fn selections_and_step_counts_agree() {
 /// limit) and on read, no file left behind.
 #[test]
 fn long_string_attributes() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     let path = dir.path().join("s.h5");
     let mut s = common::sample(3);
     for (i, len) in [0usize, 1, 64, 65, 1024, 1025, 5000, 16385, 60000]
@@ -169,7 +169,7 @@ fn edit(path: &Path, f: impl FnOnce(&File)) {
 
 #[test]
 fn c_reader_missing_file_and_other_formats() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     let path = dir.path().join("nope.h5");
     let e = read_c(&path).unwrap_err();
     assert!(
@@ -190,7 +190,7 @@ fn c_reader_missing_file_and_other_formats() {
 
 #[test]
 fn c_reader_truncated_file_is_an_error() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     for by_c in [true, false] {
         let path = written(dir.path(), by_c);
         let bytes = std::fs::read(&path).unwrap();
@@ -204,7 +204,7 @@ fn c_reader_truncated_file_is_an_error() {
 
 #[test]
 fn c_reader_missing_step_and_field() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     for by_c in [true, false] {
         let path = written(dir.path(), by_c);
         let e = H5PartC.read_step(&path, 3, &Selection::All).unwrap_err();
@@ -236,7 +236,7 @@ fn c_reader_missing_step_and_field() {
 
 #[test]
 fn c_reader_wrong_length_type_and_checksums() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
 
     let path = written(dir.path(), false);
     let crc = FieldData::F64(vec![1.0; 15]).crc32();
@@ -309,7 +309,7 @@ fn c_reader_wrong_length_type_and_checksums() {
 /// reader and the C reader both report the field's checksum.
 #[test]
 fn flipped_value_byte_in_a_c_file_fails_the_checksum() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     let path = dir.path().join("snap.h5");
     let mut s = Snapshot::new(1, 0.0, 0.0, Default::default());
     s.set_field("x", FieldData::F64(vec![0.125; 4096]));
@@ -335,7 +335,7 @@ fn flipped_value_byte_in_a_c_file_fails_the_checksum() {
 
 #[test]
 fn c_writer_refuses_invalid_snapshots_and_leaves_no_file() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     let path = dir.path().join("bad.h5");
     let mut s = common::sample(4);
     s.set_field("short", FieldData::U64(vec![1, 2]));

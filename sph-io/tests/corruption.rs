@@ -40,7 +40,7 @@ fn fixture() -> &'static Fixture {
             FieldData::F64((0..20).map(|i| -(i as f64) - 0.25).collect()),
         )
         .set_field("id", FieldData::U64((1000..1020).collect()));
-        let dir = tempfile::tempdir().unwrap();
+        let dir = common::scratch_dir();
         let path = dir.path().join("s.h5");
         // Step 1 is appended (an in-place edit of a copy), so damage to
         // both file shapes is exercised.
@@ -79,7 +79,7 @@ fn identical(read: &[Snapshot], snaps: &[Snapshot]) -> bool {
 #[test]
 fn the_fixture_reads_back() {
     let fx = fixture();
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     let path = dir.path().join("s.h5");
     std::fs::write(&path, &fx.bytes).unwrap();
     assert!(identical(&read_back(&path).unwrap(), &fx.snaps));
@@ -96,7 +96,7 @@ proptest! {
         let mut bytes = fx.bytes.clone();
         let i = pos.index(bytes.len());
         bytes[i] ^= mask;
-        let dir = tempfile::tempdir().unwrap();
+        let dir = common::scratch_dir();
         let path = dir.path().join("s.h5");
         std::fs::write(&path, &bytes).unwrap();
         match read_back(&path) {
@@ -117,7 +117,7 @@ proptest! {
         let i = r.start + off.index(r.len());
         let mut bytes = fx.bytes.clone();
         bytes[i] ^= mask;
-        let dir = tempfile::tempdir().unwrap();
+        let dir = common::scratch_dir();
         let path = dir.path().join("s.h5");
         std::fs::write(&path, &bytes).unwrap();
         let e = read_back(&path).unwrap_err();
@@ -138,7 +138,7 @@ proptest! {
         let i = pos.index(bytes.len());
         let end = (i + junk.len()).min(bytes.len());
         bytes[i..end].copy_from_slice(&junk[..end - i]);
-        let dir = tempfile::tempdir().unwrap();
+        let dir = common::scratch_dir();
         let path = dir.path().join("s.h5");
         std::fs::write(&path, &bytes).unwrap();
         if let Ok(read) = read_back(&path) {
@@ -151,7 +151,7 @@ proptest! {
     fn a_truncated_file_is_an_error(keep in any::<prop::sample::Index>()) {
         let fx = fixture();
         let n = keep.index(fx.bytes.len());
-        let dir = tempfile::tempdir().unwrap();
+        let dir = common::scratch_dir();
         let path = dir.path().join("s.h5");
         std::fs::write(&path, &fx.bytes[..n]).unwrap();
         let e = read_back(&path).unwrap_err();

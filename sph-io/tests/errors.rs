@@ -29,7 +29,7 @@ fn edit(path: &Path, f: impl FnOnce(&File)) {
 
 #[test]
 fn missing_file_is_an_io_error_naming_it() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     let path = dir.path().join("nope.h5");
     let e = read(&path).unwrap_err();
     assert!(
@@ -41,7 +41,7 @@ fn missing_file_is_an_io_error_naming_it() {
 
 #[test]
 fn other_formats_are_not_hdf5() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     for (name, bytes) in [
         ("empty.h5", &b""[..]),
         ("text.h5", &b"x,y,z\n1,2,3\n"[..]),
@@ -60,7 +60,7 @@ fn other_formats_are_not_hdf5() {
 
 #[test]
 fn truncated_file_is_an_error() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     let path = written(dir.path());
     let bytes = std::fs::read(&path).unwrap();
     for keep in [bytes.len() - 1, bytes.len() / 2, 600, 100, 8] {
@@ -72,7 +72,7 @@ fn truncated_file_is_an_error() {
 
 #[test]
 fn missing_step_names_the_count() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     let path = written(dir.path());
     let e = H5Part.read_step(&path, 3, &Selection::All).unwrap_err();
     assert!(
@@ -83,7 +83,7 @@ fn missing_step_names_the_count() {
 
 #[test]
 fn reading_an_unknown_field_names_it() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     let path = written(dir.path());
     let e = H5Part
         .read_step(&path, 0, &Selection::names(&["x", "rho"]))
@@ -100,7 +100,7 @@ fn reading_an_unknown_field_names_it() {
 
 #[test]
 fn a_field_listed_but_absent_is_missing() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     let path = written(dir.path());
     edit(&path, |f| f.group("Step#0").unwrap().delete("y").unwrap());
     let e = read(&path).unwrap_err();
@@ -117,7 +117,7 @@ fn a_field_listed_but_absent_is_missing() {
 
 #[test]
 fn a_field_of_the_wrong_length_is_reported() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     let path = written(dir.path());
     let short = FieldData::F64(vec![1.0; 15]);
     let crc = short.crc32();
@@ -140,7 +140,7 @@ fn a_field_of_the_wrong_length_is_reported() {
 
 #[test]
 fn a_field_of_the_wrong_type_is_reported() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     let path = written(dir.path());
     edit(&path, |f| {
         let g = f.group("Step#0").unwrap();
@@ -161,7 +161,7 @@ fn a_field_of_the_wrong_type_is_reported() {
 
 #[test]
 fn changed_values_fail_the_field_checksum() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     let path = written(dir.path());
     edit(&path, |f| {
         let mut ds = f.dataset("Step#0/id").unwrap();
@@ -177,7 +177,7 @@ fn changed_values_fail_the_field_checksum() {
 
 #[test]
 fn changed_metadata_fails_the_step_checksum() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     let edits: [(&str, AttrValue); 4] = [
         ("time", AttrValue::F64(0.5)),
         ("iteration", AttrValue::U64(43)),
@@ -205,7 +205,7 @@ fn changed_metadata_fails_the_step_checksum() {
 
 #[test]
 fn missing_or_mistyped_step_attributes_are_named() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     let path = written(dir.path());
     edit(&path, |f| {
         f.group("Step#0").unwrap().remove_attr("minDt").unwrap()
@@ -242,7 +242,7 @@ fn missing_or_mistyped_step_attributes_are_named() {
 
 #[test]
 fn invalid_snapshots_are_refused_and_leave_no_file() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     let path = dir.path().join("bad.h5");
     let write = |s: &sph_io::Snapshot, sel: &Selection| {
         let r = H5Part.write(&path, s, sel);
@@ -279,7 +279,7 @@ fn invalid_snapshots_are_refused_and_leave_no_file() {
 
 #[test]
 fn a_failed_write_keeps_the_old_file() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     let path = written(dir.path());
     let mut bad = common::sample(4);
     bad.set_field("short", FieldData::U64(vec![1]));
@@ -289,7 +289,7 @@ fn a_failed_write_keeps_the_old_file() {
 
 #[test]
 fn a_leftover_tmp_file_does_not_matter() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     let path = written(dir.path());
     // A crash mid-write leaves a torn NAME.tmp beside an intact NAME.
     std::fs::write(dir.path().join("snap.h5.tmp"), b"\x89HDF\r\n\x1a\ntorn").unwrap();

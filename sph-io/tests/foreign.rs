@@ -1,40 +1,17 @@
 //! Files in SPH-EXA's H5Part layout (no checksums, no field table, `f32`
-//! fields, integer ids, attributes named as SPH-EXA names them), built here
-//! with the HDF5 encoder directly, read by `sph_io::foreign`.
+//! fields, integer ids, attributes named as SPH-EXA names them), built by
+//! `common::sphexa_bytes` with the HDF5 encoder directly, read by
+//! `sph_io::foreign`.
 
-use hdf5_pure::{AttrValue, FileBuilder};
+mod common;
+
 use sph_io::foreign::{read_foreign_rows, step_count};
 use sph_io::IoError;
 
-fn sphexa_like(path: &std::path::Path, n: usize) {
-    let mut b = FileBuilder::new();
-    b.set_attr("numParticlesGlobal", AttrValue::U64(n as u64));
-    for k in 0..2 {
-        let mut g = b.create_group(&format!("Step#{k}"));
-        g.set_attr("time", AttrValue::F64(0.25 + k as f64));
-        g.set_attr("iteration", AttrValue::I64(10 + k as i64));
-        g.set_attr("minDt", AttrValue::F64(1e-3));
-        g.set_attr(
-            "box",
-            AttrValue::F64Array(vec![-1.0, 1.0, -2.0, 2.0, -3.0, 3.0]),
-        );
-        let x: Vec<f64> = (0..n).map(|i| i as f64 / n as f64 + k as f64).collect();
-        g.create_dataset("x").with_f64_data(&x);
-        let h: Vec<f32> = (0..n).map(|i| 0.5 + i as f32 / 8.0).collect();
-        g.create_dataset("h").with_f32_data(&h);
-        let id: Vec<u64> = (0..n as u64).map(|i| 100 + i).collect();
-        g.create_dataset("id").with_u64_data(&id);
-        b.add_group(g.finish());
-    }
-    std::fs::write(path, b.finish().unwrap()).unwrap();
-}
-
 #[test]
 fn sphexa_layout_reads_with_conversions_and_row_ranges() {
-    let d = std::env::temp_dir().join(format!("sph-io-foreign-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    let path = d.join("sphexa.h5");
-    sphexa_like(&path, 10);
+    let path = common::scratch_path("foreign-sphexa.h5");
+    std::fs::write(&path, common::sphexa_bytes(10)).unwrap();
     assert_eq!(step_count(&path).unwrap(), 2);
     let s = read_foreign_rows(&path, 1, &["x", "h"], &["id", "vx"], 2..5).unwrap();
     assert_eq!(s.group, "Step#1");
@@ -59,5 +36,4 @@ fn sphexa_layout_reads_with_conversions_and_row_ranges() {
         read_foreign_rows(&path, 2, &["x"], &[], 0..1),
         Err(IoError::MissingStep { count: 2, .. })
     ));
-    std::fs::remove_dir_all(&d).ok();
 }

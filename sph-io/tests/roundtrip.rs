@@ -10,7 +10,7 @@ proptest! {
 
     #[test]
     fn one_step_round_trips_bitwise(snap in common::snapshot(5, 40)) {
-        let dir = tempfile::tempdir().unwrap();
+        let dir = common::scratch_dir();
         let path = dir.path().join("s.h5");
         H5Part.write(&path, &snap, &Selection::All).unwrap();
         prop_assert_eq!(H5Part.step_count(&path).unwrap(), 1);
@@ -22,7 +22,7 @@ proptest! {
 
     #[test]
     fn several_steps_round_trip_bitwise(snaps in prop::collection::vec(common::snapshot(3, 20), 1..4)) {
-        let dir = tempfile::tempdir().unwrap();
+        let dir = common::scratch_dir();
         let path = dir.path().join("s.h5");
         let refs: Vec<&Snapshot> = snaps.iter().collect();
         H5Part.write_steps(&path, &refs, &Selection::All).unwrap();
@@ -37,7 +37,7 @@ proptest! {
     /// subset returns exactly those, in the order asked.
     #[test]
     fn selections_write_and_read_by_name(snap in common::snapshot(5, 10), pick in any::<u64>(), rev in any::<bool>()) {
-        let dir = tempfile::tempdir().unwrap();
+        let dir = common::scratch_dir();
         let path = dir.path().join("s.h5");
         let mut names: Vec<String> = snap
             .fields
@@ -64,7 +64,7 @@ proptest! {
 
 #[test]
 fn extreme_values_round_trip() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     let path = dir.path().join("s.h5");
     let mut s = common::sample(0);
     let specials = vec![
@@ -95,7 +95,7 @@ fn extreme_values_round_trip() {
 
 #[test]
 fn overwrite_replaces_the_file() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     let path = dir.path().join("s.h5");
     let a = common::sample(10);
     let mut b = common::sample(3);
@@ -112,7 +112,7 @@ fn overwrite_replaces_the_file() {
 /// changed byte in a later window is still caught.
 #[test]
 fn fields_longer_than_a_read_window_round_trip() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     let path = dir.path().join("big.h5");
     let s = common::sample(150_001);
     H5Part.write(&path, &s, &Selection::All).unwrap();
@@ -142,7 +142,7 @@ proptest! {
     /// them together.
     #[test]
     fn appended_steps_round_trip_bitwise(snaps in prop::collection::vec(common::snapshot(3, 20), 1..5)) {
-        let dir = tempfile::tempdir().unwrap();
+        let dir = common::scratch_dir();
         let path = dir.path().join("run.h5");
         for (k, s) in snaps.iter().enumerate() {
             prop_assert_eq!(H5Part.append(&path, s, &Selection::All).unwrap(), k);
@@ -160,7 +160,7 @@ proptest! {
 /// with more than 8 attributes, appended to a file written whole.
 #[test]
 fn many_appended_steps() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = common::scratch_dir();
     let path = dir.path().join("run.h5");
     let mut all: Vec<Snapshot> = (0..3)
         .map(|k| {

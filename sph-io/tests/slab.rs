@@ -5,19 +5,13 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use proptest::prelude::*;
 use sph_io::slab::{self, SlabSummary};
 use sph_io::{
     Field, FieldData, H5Part, IoError, Selection, Snapshot, SnapshotReader, SnapshotWriter,
 };
-
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("sph-io-slab-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 /// Rows `lo..hi` of every field of `snap`.
 fn rows(snap: &Snapshot, lo: usize, hi: usize) -> Snapshot {
@@ -88,9 +82,9 @@ proptest! {
         writers in 1usize..5,
         readers in 1usize..5,
     ) {
-        let d = dir("prop");
-        let one = d.join("one.h5");
-        let many = d.join("many.h5");
+        let d = common::scratch_dir();
+        let one = d.path().join("one.h5");
+        let many = d.path().join("many.h5");
         H5Part.write(&one, &snap, &Selection::All).unwrap();
         write_in_slabs(&many, &snap, writers).unwrap();
         prop_assert!(std::fs::read(&one).unwrap() == std::fs::read(&many).unwrap(),
@@ -102,8 +96,8 @@ proptest! {
 
 #[test]
 fn a_changed_value_in_any_slab_fails_the_combined_checksum() {
-    let d = dir("corrupt");
-    let path = d.join("c.h5");
+    let d = common::scratch_dir();
+    let path = d.path().join("c.h5");
     let mut snap = Snapshot::default();
     snap.set_field(
         "x",
@@ -138,8 +132,8 @@ fn a_changed_value_in_any_slab_fails_the_combined_checksum() {
 
 #[test]
 fn slabs_that_disagree_on_the_fields_are_refused_and_leave_no_file() {
-    let d = dir("disagree");
-    let path = d.join("d.h5");
+    let d = common::scratch_dir();
+    let path = d.path().join("d.h5");
     let mut a = Snapshot::default();
     a.set_field("x", FieldData::F64(vec![1.0, 2.0]));
     let mut b = Snapshot::default();
@@ -154,13 +148,13 @@ fn slabs_that_disagree_on_the_fields_are_refused_and_leave_no_file() {
     let e = slab::create_layout(&path, &a, &s).unwrap_err();
     assert!(e.to_string().contains("slab 1"), "{e}");
     assert!(!path.exists());
-    assert!(!d.join("d.h5.tmp").exists());
+    assert!(!d.path().join("d.h5.tmp").exists());
 }
 
 #[test]
 fn an_uncommitted_write_leaves_the_old_file() {
-    let d = dir("uncommitted");
-    let path = d.join("u.h5");
+    let d = common::scratch_dir();
+    let path = d.path().join("u.h5");
     let mut old = Snapshot::default();
     old.set_field("x", FieldData::F64(vec![1.0; 10]));
     H5Part.write(&path, &old, &Selection::All).unwrap();

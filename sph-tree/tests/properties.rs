@@ -1,5 +1,8 @@
 //! Property tests of the tree crate's invariants.
 
+mod common;
+
+use common::Images;
 use proptest::prelude::*;
 use sph_tree::sfc::{
     hilbert_decode, hilbert_encode, hilbert_encode_lanes, morton_decode, morton_encode,
@@ -105,8 +108,9 @@ fn make_set(n: usize, seed: u64, layout: Layout, periodic: bool, h_spread: f64) 
 
 fn brute_force(s: &SortedSet, i: usize, r: f64) -> Vec<u32> {
     let p = [s.x[i], s.y[i], s.z[i]];
+    let images = Images::of(&s.bbox);
     (0..s.x.len())
-        .filter(|&j| s.bbox.distance2(p, [s.x[j], s.y[j], s.z[j]]) < r * r)
+        .filter(|&j| images.distance2(p, [s.x[j], s.y[j], s.z[j]]) < r * r)
         .map(|j| j as u32)
         .collect()
 }
@@ -308,12 +312,13 @@ proptest! {
         let mut list = NeighborList::new();
         let search = NeighborSearch { symmetric: true, ..Default::default() };
         search.find(&tree, &s.bbox, &s.x, &s.y, &s.z, &s.h, 0..n, &mut list).unwrap();
+        let images = Images::of(&s.bbox);
         for i in 0..n {
             let p = [s.x[i], s.y[i], s.z[i]];
             let expect: Vec<u32> = (0..n)
                 .filter(|&j| {
                     let r = 2.0 * s.h[i].max(s.h[j]);
-                    s.bbox.distance2(p, [s.x[j], s.y[j], s.z[j]]) < r * r
+                    images.distance2(p, [s.x[j], s.y[j], s.z[j]]) < r * r
                 })
                 .map(|j| j as u32)
                 .collect();
@@ -479,4 +484,157 @@ fn wrap_maps_into_periodic_box() {
     assert!((p[0] - 0.25).abs() < 1e-15);
     assert_eq!(p[1], 5.0);
     assert!((p[2] - 2.5).abs() < 1e-15);
+}
+
+/// Where a coordinate sits along one axis of a box: anywhere (a fraction of
+/// the length), on a face, or a few ulps inside a face.
+#[derive(Debug, Clone, Copy)]
+enum Place {
+    Inside(f64),
+    OnLo,
+    OnHi,
+    NearLo(u8),
+    NearHi(u8),
+}
+
+impl Place {
+    fn at(self, lo: f64, hi: f64) -> f64 {
+        let step = |mut v: f64, k: u8, up: bool| {
+            for _ in 0..k {
+                v = if up { v.next_up() } else { v.next_down() };
+            }
+            v
+        };
+        match self {
+            Place::Inside(u) => (lo + u * (hi - lo)).clamp(lo, hi),
+            Place::OnLo => lo,
+            Place::OnHi => hi,
+            Place::NearLo(k) => step(lo, k, true).min(hi),
+            Place::NearHi(k) => step(hi, k, false).max(lo),
+        }
+    }
+}
+
+fn place() -> impl Strategy<Value = Place> {
+    prop_oneof![
+        4 => (0.0..=1.0f64).prop_map(Place::Inside),
+        1 => Just(Place::OnLo),
+        1 => Just(Place::OnHi),
+        1 => (1u8..8).prop_map(Place::NearLo),
+        1 => (1u8..8).prop_map(Place::NearHi),
+    ]
+}
+
+fn point_in(bbox: &BoundingBox, p: [Place; 3]) -> [f64; 3] {
+    let (lo, hi) = (bbox.lo(), bbox.hi());
+    std::array::from_fn(|k| p[k].at(lo[k], hi[k]))
+}
+
+/// Boxes anywhere in [-1e3, 1e3], edges from 1e-3 to 1e3 (different per
+/// axis), each axis periodic or open.
+fn any_box() -> impl Strategy<Value = BoundingBox> {
+    (
+        prop::array::uniform3(-1e3..1e3f64),
+        prop::array::uniform3(-3.0..3.0f64),
+        prop::array::uniform3(any::<bool>()),
+    )
+        .prop_map(|(lo, log_len, periodic)| {
+            let hi = std::array::from_fn(|k| lo[k] + 10f64.powf(log_len[k]));
+            let b = periodic.map(|p| {
+                if p {
+                    Boundary::Periodic
+                } else {
+                    Boundary::Open
+                }
+            });
+            BoundingBox::new(lo, hi, b).unwrap()
+        })
+}
+
+/// How far from half a box length a separation is: exactly half, a few
+/// ulps off, or a small relative offset.
+fn off_half() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        Just(0.0),
+        (-8i32..=8).prop_map(|k| f64::from(k) * f64::EPSILON),
+        prop::sample::select(vec![-1e-6, -1e-9, -1e-12, 1e-12, 1e-9, 1e-6]),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(2048))]
+
+    /// `distance2` is the nearest of the 27 images (to rounding), for
+    /// points anywhere in the box, on its faces and next to them.
+    #[test]
+    fn distance2_is_the_nearest_image(bbox in any_box(), a in prop::array::uniform3(place()), b in prop::array::uniform3(place())) {
+        let (a, b) = (point_in(&bbox, a), point_in(&bbox, b));
+        let got = bbox.distance2(a, b);
+        let want = Images::of(&bbox).distance2(a, b);
+        prop_assert!((got - want).abs() <= 8.0 * f64::EPSILON * want,
+            "{:?}: distance2({:?}, {:?}) = {}, nearest image {}", bbox, a, b, got, want);
+    }
+
+    /// Separations within rounding of half a box length, where the choice
+    /// between the two nearest images is decided.
+    #[test]
+    fn distance2_near_half_the_box(bbox in any_box(), a in prop::array::uniform3(place()), off in prop::array::uniform3(off_half()), sign in prop::array::uniform3(any::<bool>())) {
+        let a = point_in(&bbox, a);
+        let (lo, hi, l) = (bbox.lo(), bbox.hi(), bbox.lengths());
+        let b: [f64; 3] = std::array::from_fn(|k| {
+            let d = (0.5 + off[k]) * l[k];
+            let mut v = if sign[k] { a[k] + d } else { a[k] - d };
+            // Back into the box by one length (the image L/2 away on the other side).
+            if v > hi[k] {
+                v -= l[k];
+            } else if v < lo[k] {
+                v += l[k];
+            }
+            v.clamp(lo[k], hi[k])
+        });
+        let got = bbox.distance2(a, b);
+        let want = Images::of(&bbox).distance2(a, b);
+        prop_assert!((got - want).abs() <= 8.0 * f64::EPSILON * want,
+            "{:?}: distance2({:?}, {:?}) = {}, nearest image {}", bbox, a, b, got, want);
+    }
+
+    /// `distance2_to_box` is the distance to the nearest of the 27 images of
+    /// a sub-box (to rounding of the coordinates).
+    #[test]
+    fn distance2_to_box_is_the_nearest_image(bbox in any_box(), p in prop::array::uniform3(place()), c0 in prop::array::uniform3(place()), c1 in prop::array::uniform3(place())) {
+        let p = point_in(&bbox, p);
+        let (c0, c1) = (point_in(&bbox, c0), point_in(&bbox, c1));
+        let blo = std::array::from_fn(|k| c0[k].min(c1[k]));
+        let bhi = std::array::from_fn(|k| c0[k].max(c1[k]));
+        let got = bbox.distance2_to_box(p, blo, bhi);
+        let want = Images::of(&bbox).distance2_to_box(p, blo, bhi);
+        let scale = (0..3).map(|k| bbox.lo()[k].abs() + bbox.hi()[k].abs()).fold(0.0, f64::max);
+        prop_assert!((got.sqrt() - want.sqrt()).abs() <= 64.0 * f64::EPSILON * scale,
+            "{:?}: distance2_to_box({:?}, {:?}, {:?}) = {}, nearest image {}", bbox, p, blo, bhi, got, want);
+    }
+}
+
+/// The oracle itself on hand-computed cases (so a wrong oracle cannot make
+/// the comparisons above vacuous).
+#[test]
+fn reference_distances_by_hand() {
+    let b = BoundingBox::new(
+        [0.0; 3],
+        [1.0, 2.0, 4.0],
+        [Boundary::Periodic, Boundary::Periodic, Boundary::Open],
+    )
+    .unwrap();
+    // x through the face (0.2), y through the face with its own length (0.5),
+    // z plain (3.5, no wrap on an open axis).
+    let images = Images::of(&b);
+    let d2 = images.distance2([0.9, 1.75, 0.25], [0.1, 0.25, 3.75]);
+    assert!((d2 - (0.04 + 0.25 + 12.25)).abs() < 1e-12, "{d2}");
+    assert_eq!(images.distance2([0.0; 3], [1.0, 2.0, 0.0]), 0.0);
+    // Point at x = 0.95 against the box [0.1, 0.2] x [0, 2] x [0, 1]: 0.15
+    // through the x face; inside along y and z.
+    let g = images.distance2_to_box([0.95, 1.0, 0.5], [0.1, 0.0, 0.0], [0.2, 2.0, 1.0]);
+    assert!((g - 0.0225).abs() < 1e-12, "{g}");
+    // Along open z the box at [0, 1] is 2.5 from z = 3.5, never wrapped.
+    let g = images.distance2_to_box([0.15, 1.0, 3.5], [0.1, 0.0, 0.0], [0.2, 2.0, 1.0]);
+    assert!((g - 6.25).abs() < 1e-12, "{g}");
 }
