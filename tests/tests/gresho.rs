@@ -10,36 +10,61 @@
 //! solution: the vortex decayed to rest has L1(v_phi) = 0.32 (computed in
 //! the test from the particles), above both bounds.
 
-use sph_apps::cases::{self, Reference, SchemeOverrides};
+use sph_apps::cases::{gresho, Reference, SchemeOverrides};
+use sph_apps::reference::Gresho;
 use sph_apps::simulation::Stop;
 use sph_apps::Summary;
-use sph_core::HydroConfig;
+use sph_core::Particles;
 
 const SIDE: usize = 24;
 const T_END: f64 = 1.0;
 const BOUND_ALPHA_ONE: f64 = 0.21;
 const BOUND_SWITCHES: f64 = 0.125;
+/// Bounds on the mean distance from where the exact flow carries each
+/// particle (r0 < 0.4): alpha = 1, switches.
+const TURN_BOUND_ALPHA_ONE: f64 = 0.14;
+const TURN_BOUND_SWITCHES: f64 = 0.125;
 
-fn run(switches: bool, name: &str) -> Summary {
+/// Mean distance, over the particles starting at cylindrical radius below
+/// 0.4, between position `k` of `(x, y)` (particle `id[k]`) and where the
+/// exact vortex carries that particle from its start in `p0` by `T_END`.
+fn turn_error(p0: &Particles, id: &[f64], x: &[f64], y: &[f64]) -> f64 {
+    let vortex = Gresho::standard(gresho::GAMMA).expect("the standard vortex");
+    let (mut sum, mut n) = (0.0, 0usize);
+    for k in 0..id.len() {
+        let i = id[k] as usize;
+        assert_eq!(p0.id[i], i as u64);
+        let (x0, y0) = (p0.x[i], p0.y[i]);
+        let r0 = x0.hypot(y0);
+        if r0 >= 0.4 {
+            continue;
+        }
+        let angle = vortex.v_phi(r0) * T_END / r0;
+        let (c, s) = (angle.cos(), angle.sin());
+        sum += (x[k] - (c * x0 - s * y0)).hypot(y[k] - (s * x0 + c * y0));
+        n += 1;
+    }
+    sum / n as f64
+}
+
+/// The summary and the [`turn_error`] of a run with or without switches.
+fn run(switches: bool, name: &str) -> (Summary, f64) {
     let overrides = SchemeOverrides {
         av_switches: Some(switches),
         ..Default::default()
     };
-    let scene = cases::lookup("gresho")
-        .unwrap()
-        .setup_with(SIDE, HydroConfig::default(), &overrides)
-        .unwrap();
-    let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
-    sph_validation::run(scene, Stop::Time(T_END), &out)
+    let scene = sph_validation::scene_with("gresho", SIDE, &overrides);
+    let p0 = scene.particles.clone();
+    let out = sph_validation::scratch(name);
+    let summary = sph_validation::run_writing_particles(scene, Stop::Time(T_END), &out);
+    let q = sph_validation::read_particles(&out);
+    (summary, turn_error(&p0, &q["id"], &q["x"], &q["y"]))
 }
 
 #[test]
 fn gresho_vortex_keeps_its_rotation_better_with_switches() {
     // Null solution: everything at rest.
-    let scene = cases::lookup("gresho")
-        .unwrap()
-        .setup(SIDE, HydroConfig::default())
-        .unwrap();
+    let scene = sph_validation::scene("gresho", SIDE);
     let Some(reference @ Reference::Vortex(_)) = scene.reference.clone() else {
         panic!("gresho has a vortex reference");
     };
@@ -54,9 +79,25 @@ fn gresho_vortex_keeps_its_rotation_better_with_switches() {
     }
     let at_rest = sum / n as f64;
     assert!(at_rest > 1.5 * BOUND_ALPHA_ONE, "rest gives {at_rest}");
+    // A frozen state: every particle where it started.
+    let ids: Vec<f64> = (0..p.len()).map(|i| i as f64).collect();
+    let frozen = turn_error(p, &ids, &p.x, &p.y);
+    assert!(
+        frozen > 2.0 * TURN_BOUND_ALPHA_ONE.max(TURN_BOUND_SWITCHES),
+        "a frozen state's turn error {frozen} is within twice the bounds"
+    );
 
-    let alpha_one = run(false, "gresho24-alpha1");
-    let switched = run(true, "gresho24-switches");
+    let (alpha_one, turn_alpha_one) = run(false, "gresho24-alpha1");
+    let (switched, turn_switched) = run(true, "gresho24-switches");
+    println!("turn error: alpha = 1 {turn_alpha_one}, switches {turn_switched}, frozen {frozen}");
+    assert!(
+        turn_alpha_one < TURN_BOUND_ALPHA_ONE,
+        "alpha = 1: the vortex turned with a mean error of {turn_alpha_one}"
+    );
+    assert!(
+        turn_switched < TURN_BOUND_SWITCHES,
+        "switches: the vortex turned with a mean error of {turn_switched}"
+    );
     let (a, s) = (alpha_one.l1.unwrap().v, switched.l1.unwrap().v);
     assert!(a < BOUND_ALPHA_ONE, "alpha = 1: L1(v_phi) {a}");
     assert!(s < BOUND_SWITCHES, "switches: L1(v_phi) {s}");
