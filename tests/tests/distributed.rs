@@ -13,12 +13,18 @@
 //! with the `ve` preset (volume elements, switches: halo refreshes of X,
 //! k, div v and alpha). `SPH_DISTRIBUTED_ONLY=sedov-ve,drift` runs only
 //! the cases named.
+//!
+//! The runs write under the target directory (`target/tmp/distributed`,
+//! removed when every check passes, kept for inspection otherwise) and
+//! take their glasses from `target/tmp/glass` ([`sph_validation::layout`]),
+//! whatever `HOME` is; `mpirun` and its options come from
+//! [`sph_comm::launch`].
 
 use sph_apps::cases::{self, Scene};
 use sph_apps::simulation::{Progress, Stop};
 use sph_apps::Simulation;
+use sph_comm::launch::Launcher;
 use sph_comm::{Communicator, MpiComm, SerialComm};
-use sph_core::HydroConfig;
 use sph_kernels::{FastKernel, KernelChoice};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -92,10 +98,7 @@ fn scene(case: &str) -> Scene {
         .expect("known case");
     if case == "drift" {
         // Uniform warm gas moving as a whole through the periodic box.
-        let mut s = cases::lookup("sedov")
-            .expect("sedov")
-            .setup(side, HydroConfig::default())
-            .unwrap();
+        let mut s = sph_validation::scene("sedov", side);
         let p = &mut s.particles;
         for i in 0..p.len() {
             (p.vx[i], p.vy[i], p.vz[i]) = (3.0, -2.0, 1.0);
@@ -106,20 +109,14 @@ fn scene(case: &str) -> Scene {
         return s;
     }
     if case == "sedov-ve" {
-        let mut s = cases::lookup("sedov")
-            .expect("sedov")
-            .setup(side, HydroConfig::default())
-            .unwrap();
+        let mut s = sph_validation::scene("sedov", side);
         s.config.scheme = sph_core::Scheme::VE;
         return s;
     }
     // Each case with its own scheme, applied by its set-up (noh: kernel
     // gradients and viscosity switches, whose halo refreshes of div v and
     // alpha this exercises).
-    cases::lookup(case)
-        .expect("registered case")
-        .setup(side, HydroConfig::default())
-        .unwrap()
+    sph_validation::scene(case, side)
 }
 
 fn child(mode: &str, case: &str, out: &Path, threads: usize) {
@@ -158,14 +155,8 @@ fn child(mode: &str, case: &str, out: &Path, threads: usize) {
 
 fn launcher() {
     let exe = std::env::current_exe().expect("own path");
-    let version = Command::new("mpirun")
-        .arg("--version")
-        .output()
-        .expect("mpirun not found: install an MPI (e.g. Debian's openmpi-bin)");
-    let text = String::from_utf8_lossy(&version.stdout).to_string()
-        + &String::from_utf8_lossy(&version.stderr);
-    let open_mpi = text.contains("Open MPI") || text.contains("OpenRTE");
-    let root = std::env::temp_dir().join(format!("sph-distributed-{}", std::process::id()));
+    let mpirun = Launcher::detect().unwrap_or_else(|e| panic!("{e}"));
+    let root = sph_validation::scratch("distributed");
     let mut failures = Vec::new();
     for (case, side, steps) in runs() {
         // (label, ranks, threads)
@@ -183,12 +174,7 @@ fn launcher() {
                 c.args(["--child", "serial", case]);
                 c
             } else {
-                let mut c = Command::new("mpirun");
-                c.arg("-n").arg(ranks.to_string());
-                if open_mpi {
-                    c.args(["--oversubscribe", "--allow-run-as-root"]);
-                    c.env("OMPI_MCA_btl_vader_single_copy_mechanism", "none");
-                }
+                let mut c = mpirun.command(ranks);
                 c.arg(&exe).args(["--child", "mpi", case]);
                 c
             };
@@ -249,13 +235,14 @@ fn launcher() {
             }
         }
     }
-    std::fs::remove_dir_all(&root).ok();
     if failures.is_empty() {
+        std::fs::remove_dir_all(&root).ok();
         println!("distributed: all runs bit-identical (gravity cases within their bound)");
     } else {
         for f in &failures {
             println!("FAILED: {f}");
         }
+        println!("the runs are kept in {}", root.display());
         std::process::exit(1);
     }
 }

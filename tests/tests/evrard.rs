@@ -14,17 +14,12 @@
 //! t = 1.0 falls by 2 per unit time there: 7.5% of it is a shift of the
 //! bounce by 0.01 in time.
 
-use sph_apps::cases;
 use sph_apps::simulation::Stop;
-use sph_core::HydroConfig;
 
 #[test]
 fn evrard_30_energies_match_reference() {
-    let scene = cases::lookup("evrard")
-        .unwrap()
-        .setup(30, HydroConfig::default())
-        .unwrap();
-    let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("evrard30");
+    let scene = sph_validation::scene("evrard", 30);
+    let out = sph_validation::scratch("evrard30");
     let s = sph_validation::run(scene, Stop::Time(2.0), &out);
 
     for t in [0.8, 1.0, 2.0] {

@@ -14,15 +14,11 @@
 
 use sph_apps::cases;
 use sph_apps::simulation::Stop;
-use sph_core::HydroConfig;
 
 #[test]
 fn kelvin_helmholtz_mode_grows() {
-    let scene = cases::lookup("kelvin-helmholtz")
-        .unwrap()
-        .setup(32, HydroConfig::default())
-        .unwrap();
-    let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("kh32");
+    let scene = sph_validation::scene("kelvin-helmholtz", 32);
+    let out = sph_validation::scratch("kh32");
     let s = sph_validation::run(scene, Stop::Time(1.5), &out);
     assert!(s.energy_rel_drift.abs() < 1e-3, "{}", s.energy_rel_drift);
     assert!(s.momentum_rel_drift < 1e-12, "{}", s.momentum_rel_drift);

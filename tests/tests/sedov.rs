@@ -15,28 +15,20 @@
 //! the peak density, P and |v| by bounds (30^3 figures + 10%) that the null
 //! solution fails, and all three by convergence.
 
-use sph_apps::cases;
 use sph_apps::simulation::Stop;
 use sph_apps::Summary;
-use sph_core::HydroConfig;
 
 const T_END: f64 = 0.05;
 
 fn run(side: usize) -> Summary {
-    let scene = cases::lookup("sedov")
-        .unwrap()
-        .setup(side, HydroConfig::default())
-        .unwrap();
-    let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("sedov{side}"));
+    let scene = sph_validation::scene("sedov", side);
+    let out = sph_validation::scratch(&format!("sedov{side}"));
     sph_validation::run(scene, Stop::Time(T_END), &out)
 }
 
 /// L1 rho / P / |v| of the initial state of `side^3`, held still.
 fn null_solution(side: usize) -> [f64; 3] {
-    let scene = cases::lookup("sedov")
-        .unwrap()
-        .setup(side, HydroConfig::default())
-        .unwrap();
+    let scene = sph_validation::scene("sedov", side);
     let reference = scene.reference.clone().unwrap();
     let p = &scene.particles;
     let gamma = sph_apps::cases::sedov::GAMMA;

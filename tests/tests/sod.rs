@@ -17,10 +17,8 @@
 //! solution, must fail every L1 bound and the shock position (checked in
 //! the test, from the same particles).
 
-use sph_apps::cases::{self, Layout, Reference, SchemeOverrides, Share};
+use sph_apps::cases::Reference;
 use sph_apps::simulation::Stop;
-use sph_core::HydroConfig;
-use sph_kernels::KernelChoice;
 
 const SIDE: usize = 40;
 const T_END: f64 = 0.2;
@@ -49,21 +47,7 @@ fn front(profile: &str, level: f64) -> f64 {
 
 #[test]
 fn sod_tube_matches_the_exact_riemann_solution() {
-    let tmp = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"));
-    let layout = Layout::Glass {
-        kernel: KernelChoice::default(),
-        dir: tmp.join("glass"),
-    };
-    let scene = cases::lookup("sod")
-        .unwrap()
-        .setup_share(
-            SIDE,
-            HydroConfig::default(),
-            &SchemeOverrides::default(),
-            Share::WHOLE,
-            &layout,
-        )
-        .unwrap();
+    let scene = sph_validation::scene("sod", SIDE);
     let Some(Reference::Tube(tube)) = scene.reference.clone() else {
         panic!("sod has a tube reference");
     };
@@ -84,7 +68,7 @@ fn sod_tube_matches_the_exact_riemann_solution() {
         assert!(null[k] > 2.0 * L1_MAX[k], "null {null:?} passes bound {k}");
     }
 
-    let out = tmp.join("sod40");
+    let out = sph_validation::scratch("sod40");
     let s = sph_validation::run(scene, Stop::Time(T_END), &out);
     let l1 = s.l1.expect("L1 against the exact solution");
     let got = [l1.rho, l1.p, l1.v];

@@ -15,16 +15,13 @@
 
 use sph_apps::cases;
 use sph_apps::simulation::Stop;
-use sph_core::HydroConfig;
 
 #[test]
 fn wind_shock_runs_to_two_kelvin_helmholtz_times() {
     let case = cases::lookup("wind-shock").unwrap();
-    let scene = case
-        .setup(case.default_side(), HydroConfig::default())
-        .unwrap();
+    let scene = sph_validation::scene(case.name(), case.default_side());
     let t_end = 2.0 * cases::wind_shock::TAU_KH;
-    let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("wind-shock");
+    let out = sph_validation::scratch("wind-shock");
     let s = sph_validation::run_writing_particles(scene, Stop::Time(t_end), &out);
     assert!((s.t_end - t_end).abs() < 1e-9, "stopped at {}", s.t_end);
     assert!(s.energy_rel_drift.abs() < 1e-3, "{}", s.energy_rel_drift);
