@@ -1,5 +1,5 @@
 //! The analytic references (`sph_apps::reference`) against independent oracles: the Sedov
-//! profiles in `tests/data/*.csv`, the numbers of VALIDATION.md, conservation integrals
+//! profiles in `tests/data/*.csv`, the numbers of `docs/cases.md`, conservation integrals
 //! and the Rankine-Hugoniot jump conditions.
 
 use std::f64::consts::PI;
@@ -13,7 +13,7 @@ const GAMMA: f64 = 5.0 / 3.0;
 const SEDOV_T005: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/sedov_t0.05.csv");
 const SEDOV_T009: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/sedov_t0.09.csv");
 
-/// The VALIDATION.md Sedov case: gamma 5/3, E = 1, rho0 = 1, 3-D, ambient labelled as the CSV.
+/// The Sedov case of `docs/cases.md`: gamma 5/3, E = 1, rho0 = 1, 3-D, ambient labelled as the CSV.
 fn sedov() -> &'static Sedov {
     static SEDOV: OnceLock<Sedov> = OnceLock::new();
     SEDOV.get_or_init(|| {

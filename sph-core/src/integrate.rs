@@ -14,7 +14,7 @@ use sph_tree::BoundingBox;
 use std::ops::Range;
 
 /// Smoothing-length update `h <- h * 0.5 * (1 + c ng0 / nc)^(1/p)`, whose
-/// fixed point is `nc = ng0` (PHYSICS.md).
+/// fixed point is `nc = ng0` (`docs/physics.md`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HUpdate {
     /// Target neighbour count (self included).

@@ -233,7 +233,7 @@ impl Scheme {
     /// of the switches uses `X_j / k_j` (SPH-EXA: `X_j / k_i`), exact for
     /// linear fields. On Sedov t = 0.05 its L1 errors of rho, P and |v| are
     /// at most 1.3% above and up to 2.9% below SPH-EXA's `ve` at 30^3,
-    /// 40^3 and 50^3 (README).
+    /// 40^3 and 50^3 (`docs/schemes.md`).
     pub const VE: Scheme = Scheme {
         gradients: Gradients::Iad,
         grad_h: true,
@@ -251,7 +251,7 @@ impl Scheme {
     /// conductivity `alpha_u = 1` (Price 2008's value, not tuned): on
     /// Sedov (t = 0.05) its L1 of rho, P and |v| are below those of
     /// SPH-EXA's `ve` at 30^3, 40^3 and 50^3. On Noh and Evrard it is
-    /// closer to the references than `ve` but still far (README).
+    /// closer to the references than `ve` but still far (`docs/schemes.md`).
     pub const VE_AC: Scheme = Scheme {
         grad_h: false,
         conductivity: Some(1.0),
@@ -266,7 +266,7 @@ impl Scheme {
     /// run time, its L1 rho is 12-15% and its L1 |v| 4-13% below `ve-ac`'s
     /// and its L1 P within 4% of it (the same cost per step, 19-37% more
     /// steps); on Noh its plateau is 50-54 rho0 (`ve`: 23) and on Evrard
-    /// it is within 5.4% of the reference through t = 1.0 (README).
+    /// it is within 5.4% of the reference through t = 1.0 (`docs/schemes.md`).
     pub const BEST: Scheme = Scheme {
         av_form: AvForm::Paper,
         viscosity: Viscosity::Switched(AvSwitchParams {
@@ -326,7 +326,7 @@ impl Scheme {
     /// Past the bounce the shocked core keeps a velocity dispersion that
     /// the conduction of its pressure noise turns into heat; `alpha_u` was
     /// chosen on Evrard at 30^3 (1, 2, 2.5, 3, 4 scanned) and holds at
-    /// 40^3 (README, Evrard).
+    /// 40^3 (`docs/cases.md`, Evrard).
     pub const EVRARD: Scheme = Scheme {
         gradients: Gradients::Kernel,
         grad_h: false,

@@ -2,7 +2,7 @@
 
 use crate::momentum::MomentumStats;
 
-/// Time-step criteria (PHYSICS.md): Courant, density change, acceleration,
+/// Time-step criteria (`docs/physics.md`): Courant, density change, acceleration,
 /// falling internal energy, growth limit.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TimestepParams {

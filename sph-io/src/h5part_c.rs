@@ -36,7 +36,7 @@
 //!   pure-Rust reader was given 80,000 random corruptions without a panic).
 //!   The CRC32s are checked all the same.
 //! - Parallel HDF5 (one file written collectively by MPI ranks) is not used
-//!   here; see the crate README for what it would take.
+//!   here; see `docs/architecture.md` for what it would take.
 //!
 //! Writes go to `NAME.tmp`, are synced to disk and renamed, and
 //! [`SnapshotWriter::append`] extends a copy of the file, as with

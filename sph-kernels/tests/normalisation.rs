@@ -7,7 +7,7 @@ use std::f64::consts::PI;
 use proptest::prelude::*;
 use sph_kernels::{normalisation, CubicSpline, Kernel, Sinc, WendlandC2, WendlandC4, WendlandC6};
 
-/// SPHYNX's fit of K_n (Cabezón et al.), quoted in PHYSICS.md.
+/// SPHYNX's fit of K_n (Cabezón et al.), quoted in `docs/physics.md`.
 fn sphynx_fit(n: f64) -> f64 {
     let (b0, b1, b2, b3) = (2.7012593e-2, 2.0410827e-2, 3.7451957e-3, 4.7013839e-2);
     b0 + b1 * n.sqrt() + b2 * n + b3 * n.powf(1.5)

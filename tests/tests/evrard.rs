@@ -1,7 +1,7 @@
 //! Evrard collapse (the unit sphere cut from a glass at 30 particles per
 //! 2 units: 14175 particles, self-gravity) to t = 2.0, with the case's
 //! scheme and Courant factor, against the energies of the 1-D Lagrangian
-//! reference in VALIDATION.md (quoted there as good to 2%;
+//! reference in `docs/cases.md` (quoted there as good to 2%;
 //! `tests/reference/evrard_1d.py`, an independent 1-D code, lands within
 //! 0.8% of them): E_kin, E_int and E_grav within 7.5% at t = 0.8 (infall),
 //! t = 1.0 (the bounce) and t = 2.0 (after it); total energy (including

@@ -28,7 +28,7 @@
 //!   falling from 16 to 32 by at least 10% (measured: 20%). The paper's
 //!   scheme must exceed the 16 bound by 2x.
 //!
-//! VALIDATION's goal, v_rms / c < 1e-2 at t = 1 and 32 per side, holds
+//! The validation brief's goal (`docs/cases.md`), v_rms / c < 1e-2 at t = 1 and 32 per side, holds
 //! only in the exact lattice's realisation; the test prints the value at
 //! t = 1 but does not bound it.
 

@@ -1,4 +1,4 @@
-//! Wind-shock (cloud crushing, VALIDATION.md set-up) at the case's default
+//! Wind-shock (cloud crushing, `docs/cases.md` set-up) at the case's default
 //! 64 wind particles per unit length (16,539 particles cut from a 16^3
 //! glass block) to 2 tau_KH, with the case's scheme (`ve`): a robustness
 //! test.

@@ -29,7 +29,7 @@ pub struct EvrardCollapse;
 /// of its pressure noise turns it into heat. On the glass, E_kin at
 /// t = 1.0 is +0.1% of the reference at 30^3 and +3.4% at 40^3 with
 /// conductivity 3, +13.3% and +13.6% with 1; 3 was chosen at 30^3 on the
-/// lattice from 1, 2, 2.5, 3, 4 (README, Evrard).
+/// lattice from 1, 2, 2.5, 3, 4 (`docs/cases.md`, Evrard).
 pub const SCHEME: Scheme = Scheme::EVRARD;
 
 /// Courant factor: 2.5 times the default 0.2. This scheme's signal
@@ -43,7 +43,7 @@ pub const SCHEME: Scheme = Scheme::EVRARD;
 /// steps) E_kin at t = 1.0 goes from +4.4% to +3.7% and the rest move by at
 /// most 0.2 points. Above 0.5 the density-change criterion sets most steps
 /// (0.6: 8% fewer again). 0.2 and 0.4 differ by at most 0.9 points
-/// (README, Evrard).
+/// (`docs/cases.md`, Evrard).
 pub const COURANT: f64 = 0.5;
 
 /// Adiabatic index.
@@ -51,7 +51,7 @@ pub const GAMMA: f64 = 5.0 / 3.0;
 /// Initial specific internal energy.
 pub const U0: f64 = 0.05;
 
-/// Energies of the 1-D Lagrangian reference (VALIDATION.md, +-2%):
+/// Energies of the 1-D Lagrangian reference (`docs/cases.md`, +-2%):
 /// (t, E_kin, E_int, E_grav).
 pub const ENERGIES: [EnergyPoint; 4] = [
     EnergyPoint {

@@ -1,6 +1,6 @@
 //! The Gresho-Chan vortex in a thin periodic slab: a rotating flow held
 //! by its pressure gradient, so nothing should change; SPH's viscosity and
-//! noise make it decay. Set-up of `../shared/VALIDATION.md`: R1 = 0.2,
+//! noise make it decay. Set-up of `docs/cases.md`: R1 = 0.2,
 //! rho = 1, P0 = 5, gamma = 5/3, box `[-0.5, 0.5)^2` in x and y, 8 lattice
 //! spacings in z, all periodic, to t = 1. The error is `L1(v_phi)` for
 //! cylindrical radii up to 0.5.

@@ -3,7 +3,7 @@
 //! solution is the initial state. SPH's smoothed density across the
 //! contact makes a pressure blip there that pushes the interface; a scheme
 //! that handles contacts keeps the cube still and square. Set-up of
-//! `../shared/VALIDATION.md`: box `[-0.5, 0.5)^3`, inner cube
+//! `docs/cases.md`: box `[-0.5, 0.5)^3`, inner cube
 //! `[-0.25, 0.25)^3`, gamma = 5/3, to t = 1 (two sound crossings of the box
 //! in the thin gas, c = 2.04).
 //!

@@ -5,7 +5,7 @@
 //! width 0.025, P = 2.5, gamma = 5/3, seeded by v_y = 0.01 sin(4 pi x).
 //! The observable is the amplitude M(t) of the seeded mode (their
 //! eqs. 6-8), written every step to `curve.csv`; their converged
-//! reference reaches M(1.5) = 0.1479 (VALIDATION.md).
+//! reference reaches M(1.5) = 0.1479 (`docs/cases.md`).
 //!
 //! The particles sit on one cubic lattice with masses `rho(y) dx^3`, so the
 //! smoothed profile is resolved without stretching the lattice.
@@ -98,7 +98,7 @@ impl Case for KelvinHelmholtz {
     }
 
     /// `shear` ([`Scheme::SHEAR`]): viscosity switches with the AV cleaning
-    /// (after SPH-EXA's, which VALIDATION.md credits with its family's best
+    /// (after SPH-EXA's, which `docs/cases.md` credits with its family's best
     /// KH figures, 0.12-0.126; ours: 0.117 at the default 64^2 x 8).
     fn default_scheme(&self) -> Scheme {
         Scheme::SHEAR

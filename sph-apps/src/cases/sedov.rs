@@ -2,7 +2,7 @@
 //! does: regular lattice in `[-0.5, 0.5]^3`, rho = 1, gamma = 5/3, E = 1
 //! deposited as a Gaussian of width 0.1, first dt = 1e-6 and a growth of
 //! 1.1 per step from there (`--first-step criteria` starts at the Courant
-//! step of the hot centre instead: ~60 steps fewer, README).
+//! step of the hot centre instead: ~60 steps fewer, `docs/usage.md`).
 
 use super::{Layout, Listing, cube_lattice, field_set, initial_h, Case, InitialState, Reference, Scheme, Share};
 use crate::reference::Sedov;

@@ -94,7 +94,7 @@ impl Case for SquarePatch {
     /// the paper's constant `alpha = 1`, and artificial stress `epsilon =
     /// 0.2` (Monaghan 2000's value, not tuned here). Each part answers a
     /// measured failure of the paper's scheme on this case (20^3 and 30^3
-    /// to t = 0.5 s, README "Square patch"):
+    /// to t = 0.5 s, `docs/cases.md`, "Square patch"):
     /// - adaptive h: surface particles start with ~37 of 100 neighbours
     ///   and grow their h over the first ~30 steps, which lowers their
     ///   density against the reference calibrated at step 1 (-6.5%, P down

@@ -1,7 +1,7 @@
 //! Wind-shock (cloud crushing): a cold dense cloud (radius 0.025, rho 10)
 //! at rest in a hot supersonic wind (rho 1, u 1.5, v_x 2.7, Mach 2.1) in
 //! the periodic box `1 x 0.25 x 0.25`, in pressure equilibrium, gamma 5/3
-//! (`../shared/VALIDATION.md`). The wind shocks on the cloud and strips
+//! (`docs/cases.md`). The wind shocks on the cloud and strips
 //! it; the observable is the surviving cloud fraction against t / tau_KH
 //! (tau_KH = 0.0937): the mass with rho >= 0.64 rho_cloud and
 //! u <= 0.9 u_wind (temperature at most 0.9 of the wind's) over the
@@ -37,7 +37,7 @@ pub const RHO_WIND: f64 = 1.0;
 pub const U_WIND: f64 = 1.5;
 /// Wind speed along x.
 pub const V_WIND: f64 = 2.7;
-/// Kelvin-Helmholtz time of the cloud (VALIDATION.md).
+/// Kelvin-Helmholtz time of the cloud (`docs/cases.md`).
 pub const TAU_KH: f64 = 0.0937;
 /// Box size (x, y, z).
 pub const BOX: [f64; 3] = [1.0, 0.25, 0.25];

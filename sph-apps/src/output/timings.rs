@@ -157,7 +157,7 @@ impl TimingsCsv {
     /// The last line, `mean_2..N`: the means over steps 2..N; then closes
     /// the file. The line ends before the text column `dt_limit`, which has
     /// no mean, so a reader that zips it with the header and parses every
-    /// field as a number (`../shared/bench/side-by-side`) never meets text.
+    /// field as a number (`docs/bench/side-by-side`) never meets text.
     pub fn finish(mut self, totals: &StageTotals) -> Result<(), AppError> {
         let means: Vec<String> = totals
             .stage_means()
