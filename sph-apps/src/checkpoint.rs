@@ -31,6 +31,7 @@
 use crate::output::snapshot::{self, field};
 use crate::AppError;
 use sph_comm::Communicator;
+use sph_core::fields::Column;
 use sph_core::{FieldSet, Particles, RunState};
 use sph_io::{Attr, FieldData, H5Part, Selection, Snapshot, SnapshotReader};
 use sph_tree::BoundingBox;
@@ -114,18 +115,13 @@ impl TestPause {
     }
 }
 
-/// The checkpoint fields of particles `p` (see the [module docs](self)).
+/// The checkpoint fields of particles `p` (see the [module docs](self)):
+/// from the field table, the id, the persistent state and the
+/// integrator's history that `p` holds.
 pub fn fields(p: &Particles) -> Vec<&'static str> {
-    let mut names = vec![
-        "id", "x", "y", "z", "vx", "vy", "vz", "h", "m", "u", "dx", "dy", "dz", "du_prev",
-    ];
-    if !p.alpha.is_empty() {
-        names.push("alpha");
-    }
-    if !p.eos_ref[0].is_empty() {
-        names.extend(["rho0", "p0"]);
-    }
-    names
+    sph_core::fields::checkpointed(p.fields())
+        .map(|f| f.name)
+        .collect()
 }
 
 /// The checkpoint of this rank's particles `owned` of `p` with the run
@@ -282,26 +278,18 @@ pub fn load<C: Communicator>(comm: &C, spec: &str) -> Result<Loaded, AppError> {
 }
 
 /// Particles with the optional `fields` and, from `rows`, every value a
-/// checkpoint stores (`alpha` enables the AV-switch field); fields not in
-/// `rows` stay zero.
+/// checkpoint of such a run stores (a referenced EOS's `rho0` and `p0`
+/// where `rows` has them).
 ///
 /// # Errors
 /// A checkpoint field missing from `rows` or of the wrong type, named.
-pub fn particles(
-    rows: &Snapshot,
-    fields: FieldSet,
-    alpha: bool,
-    path: &Path,
-) -> Result<Particles, AppError> {
+pub fn particles(rows: &Snapshot, fields: FieldSet, path: &Path) -> Result<Particles, AppError> {
     let n = rows.len();
+    let fields = FieldSet {
+        eos_ref: fields.eos_ref || rows.field("rho0").is_some(),
+        ..fields
+    };
     let mut p = Particles::new(n, fields);
-    if alpha {
-        p.enable_alpha(0.0);
-    }
-    let referenced = rows.field("rho0").is_some();
-    if referenced {
-        p.eos_ref = [vec![0.0; n], vec![0.0; n]];
-    }
     let missing = |name: &str| {
         AppError::Usage(format!(
             "{}: the checkpoint has no field '{name}' of the right type (it holds: {})",
@@ -323,43 +311,12 @@ pub fn particles(
             rows.fields[0].name
         )));
     }
-    match rows.field("id") {
-        Some(FieldData::U64(v)) => p.id.copy_from_slice(v),
-        _ => return Err(missing("id")),
-    }
-    let mut names = vec![
-        "x", "y", "z", "vx", "vy", "vz", "h", "m", "u", "dx", "dy", "dz", "du_prev",
-    ];
-    if alpha {
-        names.push("alpha");
-    }
-    if referenced {
-        names.extend(["rho0", "p0"]);
-    }
-    for name in names {
-        let src = rows
-            .field(name)
-            .and_then(FieldData::as_f64)
-            .ok_or_else(|| missing(name))?;
-        let dst = match name {
-            "x" => &mut p.x,
-            "y" => &mut p.y,
-            "z" => &mut p.z,
-            "vx" => &mut p.vx,
-            "vy" => &mut p.vy,
-            "vz" => &mut p.vz,
-            "h" => &mut p.h,
-            "m" => &mut p.m,
-            "u" => &mut p.u,
-            "dx" => &mut p.dx,
-            "dy" => &mut p.dy,
-            "dz" => &mut p.dz,
-            "du_prev" => &mut p.du_prev,
-            "alpha" => &mut p.alpha,
-            "rho0" => &mut p.eos_ref[0],
-            _ => &mut p.eos_ref[1],
-        };
-        dst.copy_from_slice(src);
+    for f in sph_core::fields::checkpointed(fields) {
+        match (f.column, rows.field(f.name)) {
+            (Column::F64(_, get), Some(FieldData::F64(v))) => get(&mut p).copy_from_slice(v),
+            (Column::U64(_, get), Some(FieldData::U64(v))) => get(&mut p).copy_from_slice(v),
+            _ => return Err(missing(f.name)),
+        }
     }
     Ok(p)
 }

@@ -43,7 +43,8 @@ pub fn return_large_buffers_to_os() {
 }
 
 /// Hands the free pages inside glibc's heaps back to the OS
-/// (`malloc_trim(0)`); the simulation loop calls it after every step.
+/// (`malloc_trim(0)`); the `sphexa` binary has the simulation loop call
+/// it after every step ([`Simulation::set_after_step`](crate::Simulation::set_after_step)).
 ///
 /// Small allocations (below [`MMAP_THRESHOLD`]) come from the heap, and
 /// the step's short-lived ones, freed between longer-lived ones, leave

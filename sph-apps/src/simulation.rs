@@ -164,7 +164,7 @@ pub enum CheckpointEvery {
 #[derive(Debug, Clone, Default)]
 pub struct Outputs {
     /// Snapshot fields (`x`, `rho`, ...; see
-    /// [`crate::output::snapshot::BASE_FIELDS`]) and schedule.
+    /// [`crate::output::snapshot::base_fields`]) and schedule.
     pub snapshots: Option<(Vec<String>, Schedule)>,
     /// Checkpoint schedule and how many of this run's checkpoints to keep
     /// (older ones are deleted once a newer one is complete; 0 keeps all).
@@ -224,6 +224,7 @@ pub struct Simulation<C: Communicator = SerialComm> {
     outputs: Outputs,
     resumed_at: Option<u64>,
     watch: Option<Watch>,
+    after_step: Option<fn()>,
 }
 
 impl Simulation {
@@ -307,6 +308,7 @@ impl<C: Communicator> Simulation<C> {
             total,
             write_particles: false,
             rank_timings: false,
+            after_step: None,
             outputs: Outputs::default(),
             resumed_at: resume.map(|s| s.step),
             watch: Some(Watch::new(watch::Bounds::for_run(scene_gravity), false)),
@@ -322,12 +324,8 @@ impl<C: Communicator> Simulation<C> {
             let p = &self.scene.particles;
             for name in fields {
                 if snapfile::field(p, 0..0, name).is_none() {
-                    let have: Vec<&str> = snapfile::BASE_FIELDS
-                        .iter()
-                        .chain(snapfile::OPTIONAL_FIELDS)
-                        .copied()
-                        .filter(|n| snapfile::field(p, 0..0, n).is_some())
-                        .collect();
+                    let have: Vec<&str> =
+                        sph_core::fields::held(p.fields()).map(|f| f.name).collect();
                     return Err(AppError::Usage(format!(
                         "--snapshot-fields: this run has no field '{name}' (its scheme does not use it); it has: {}",
                         have.join(",")
@@ -376,6 +374,15 @@ impl<C: Communicator> Simulation<C> {
     /// goes on without it (the run does not depend on a diagnostic).
     pub fn set_rank_timings(&mut self, on: bool) {
         self.rank_timings = on;
+    }
+
+    /// A function the loop calls after every step (none by default; the
+    /// `sphexa` binary passes
+    /// [`memory::return_free_heap_to_os`](crate::memory::return_free_heap_to_os),
+    /// a process-wide allocator action a library must not take on its
+    /// caller's behalf).
+    pub fn set_after_step(&mut self, hook: Option<fn()>) {
+        self.after_step = hook;
     }
 
     /// How the run watches its conserved quantities (default: the bounds
@@ -453,7 +460,9 @@ impl<C: Communicator> Simulation<C> {
                 Ok(r) => r,
                 Err(e) => return Err(watch::locate(e, &self.scene.particles, self.hydro.owned())),
             };
-            crate::memory::return_free_heap_to_os();
+            if let Some(hook) = self.after_step {
+                hook();
+            }
             first.get_or_insert(r.conserved);
             energies.push(r.t, &r.conserved);
             totals.record(&r);

@@ -110,7 +110,7 @@ fn fixture() -> &'static Fixture {
 fn restart(path: &Path) -> Result<(RunState, Snapshot), String> {
     let fx = fixture();
     let l = checkpoint::load(&SerialComm::new(), s(path)).map_err(|e| e.to_string())?;
-    checkpoint::particles(&l.rows, fx.fields, false, &l.path).map_err(|e| e.to_string())?;
+    checkpoint::particles(&l.rows, fx.fields, &l.path).map_err(|e| e.to_string())?;
     Ok((l.state, l.rows))
 }
 

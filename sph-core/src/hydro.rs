@@ -113,7 +113,10 @@ impl HydroConfig {
     /// The optional per-particle fields a run with this configuration
     /// needs.
     pub fn fields(&self) -> FieldSet {
-        self.scheme.fields(self.gravity.is_some())
+        FieldSet {
+            eos_ref: self.eos.needs_reference(),
+            ..self.scheme.fields(self.gravity.is_some())
+        }
     }
 }
 
@@ -437,6 +440,8 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             p.dy[i] = p.vy[i] * dt0;
             p.dz[i] = p.vz[i] * dt0;
         }
+        // Particles built with the configuration's fields hold alpha
+        // already; others (FieldSet::default()) get it here.
         if let Some(sw) = self.config.scheme.switches() {
             p.enable_alpha(sw.alpha_min);
         }

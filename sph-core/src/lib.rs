@@ -56,6 +56,7 @@ pub mod conserved;
 pub mod density;
 pub mod eos;
 mod error;
+pub mod fields;
 pub mod geometry;
 pub mod hydro;
 pub mod iad;

@@ -441,12 +441,15 @@ impl Scheme {
     }
 
     /// The optional per-particle fields the scheme needs (`gravity`: the
-    /// run has self-gravity).
+    /// run has self-gravity; the EOS's reference state is the
+    /// [`HydroConfig`](crate::HydroConfig)'s to add).
     pub fn fields(&self, gravity: bool) -> FieldSet {
         FieldSet {
             iad: self.gradients == Gradients::Iad,
             grad_h: self.grad_h,
             gravity,
+            alpha: self.switches().is_some(),
+            eos_ref: false,
         }
     }
 }

@@ -94,7 +94,7 @@ proptest! {
     ) {
         let nh = keys.len();
         let n = n_owned + nh;
-        let fields = FieldSet { grad_h: true, iad: true, gravity };
+        let fields = FieldSet { grad_h: true, iad: true, gravity, ..FieldSet::default() };
         let mut p = Particles::new(n, fields);
         for i in 0..n {
             p.id[i] = 1000 + i as u64;
@@ -131,7 +131,7 @@ proptest! {
         switches in any::<bool>(),
         gravity in any::<bool>(),
     ) {
-        let fields = FieldSet { grad_h: true, iad: true, gravity };
+        let fields = FieldSet { grad_h: true, iad: true, gravity, ..FieldSet::default() };
         let mut src = Particles::new(n, fields);
         if switches {
             src.enable_alpha(0.5);

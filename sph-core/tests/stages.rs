@@ -537,7 +537,7 @@ fn integrator_is_time_reversible() {
         FieldSet {
             iad: false,
             grad_h: false,
-            gravity: false,
+            ..FieldSet::default()
         },
     );
     let bbox = BoundingBox::cube(-10.0, 10.0, Boundary::Open).unwrap();

@@ -430,9 +430,9 @@ struct RunArgs {
     /// --snapshot-every-steps, --snapshot-every-time or --snapshot-at
     /// schedule is given, as OUT/snapshots/snapshot_SSSSSSSS.h5 (HDF5,
     /// H5Part layout: h5py, ParaView and SPH-EXA's scripts read them).
-    /// Fields: id,x,y,z,vx,vy,vz,h,m,u,rho,p,c,ax,ay,az,du,du_prev,dx,dy,dz,nc
-    /// and, where the scheme has them, omega, alpha, phi, c11..c33, rho0, p0.
-    #[arg(long, value_name = "LIST", value_parser = parse_field_list)]
+    /// Fields: see the full help (--help).
+    #[arg(long, value_name = "LIST", value_parser = parse_field_list,
+          long_help = snapshot_fields_help())]
     snapshot_fields: Option<FieldList>,
     /// Write a snapshot after every N-th step (N >= 1).
     #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = parse_steps)]
@@ -547,6 +547,20 @@ fn parse_duration(s: &str) -> Result<f64, String> {
 /// A `--snapshot-fields` list.
 #[derive(Debug, Clone, PartialEq)]
 struct FieldList(Vec<String>);
+
+/// The long help of `--snapshot-fields`, its field list from the field
+/// table.
+fn snapshot_fields_help() -> String {
+    format!(
+        "Fields of the snapshots, comma-separated (default: {}). Snapshots are written when a \
+         --snapshot-every-steps, --snapshot-every-time or --snapshot-at schedule is given, as \
+         OUT/snapshots/snapshot_SSSSSSSS.h5 (HDF5, H5Part layout: h5py, ParaView and SPH-EXA's \
+         scripts read them). Fields: {}; and, where the scheme has them: {}.",
+        snapfile::DEFAULT_FIELDS.join(","),
+        snapfile::base_fields().join(","),
+        snapfile::optional_fields().join(",")
+    )
+}
 
 fn parse_field_list(s: &str) -> Result<FieldList, String> {
     snapfile::parse_fields(s).map(FieldList)
@@ -1440,19 +1454,13 @@ fn init_particles<C: Communicator>(
     let mut p = sph_core::Particles::new(n, fields);
     p.id = ids.unwrap_or_else(|| rows.clone().collect());
     for (name, v) in values {
-        let dst = match name.as_str() {
-            "x" => &mut p.x,
-            "y" => &mut p.y,
-            "z" => &mut p.z,
-            "vx" => &mut p.vx,
-            "vy" => &mut p.vy,
-            "vz" => &mut p.vz,
-            "h" => &mut p.h,
-            "m" => &mut p.m,
-            "u" => &mut p.u,
-            _ => continue,
-        };
-        dst.copy_from_slice(&v);
+        // Only the initial state's fields: the rest start from the case.
+        if !required.contains(&name.as_str()) && !optional.contains(&name.as_str()) {
+            continue;
+        }
+        if let Some(dst) = sph_core::fields::find(&name).and_then(|f| f.f64_mut(&mut p)) {
+            dst.copy_from_slice(&v);
+        }
     }
     let bbox = match head.bbox {
         Some(b) => {
@@ -1616,7 +1624,6 @@ fn run(a: RunArgs) -> Result<(), AppError> {
     };
     let mut scene = case.setup_share(side, config, &overrides, share, &layout)?;
     scene.config.scheme.validate()?;
-    let switches = scene.config.scheme.switches().is_some();
     // A checkpoint, or a snapshot as initial conditions, replaces the
     // case's particles (each rank reads only its share).
     let loaded = match &a.restart {
@@ -1632,7 +1639,7 @@ fn run(a: RunArgs) -> Result<(), AppError> {
                 case.name()
             )));
         }
-        scene.particles = checkpoint::particles(&l.rows, scene.config.fields(), switches, &l.path)?;
+        scene.particles = checkpoint::particles(&l.rows, scene.config.fields(), &l.path)?;
         scene.total = l.total;
         scene.bbox = l.bbox;
     } else if let Some(spec) = &a.init {
@@ -1677,6 +1684,7 @@ fn run(a: RunArgs) -> Result<(), AppError> {
     let result = sim.and_then(|mut sim| {
         sim.set_write_particles(a.write_particles);
         sim.set_rank_timings(a.rank_timings);
+        sim.set_after_step(Some(sph_apps::memory::return_free_heap_to_os));
         // Self-gravity's default momentum bound is the tree's accuracy.
         let momentum = if a.max_momentum_drift == DEFAULT_MOMENTUM_BOUND && gravity {
             GRAVITY_MOMENTUM_BOUND

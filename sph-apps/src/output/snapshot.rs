@@ -28,6 +28,7 @@
 
 use crate::AppError;
 use sph_comm::{Communicator, ReduceOp};
+use sph_core::fields::{Column, Field, Needs, FIELDS};
 use sph_core::Particles;
 use sph_io::slab::{self, SlabSummary};
 use sph_io::{Attr, BoxSpec, FieldData, IoError, Selection, Snapshot};
@@ -35,17 +36,19 @@ use sph_tree::{Boundary, BoundingBox};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-/// Fields every run has, in the order `--snapshot-fields` lists them.
-pub const BASE_FIELDS: &[&str] = &[
-    "id", "x", "y", "z", "vx", "vy", "vz", "h", "m", "u", "rho", "p", "c", "ax", "ay", "az", "du",
-    "du_prev", "dx", "dy", "dz", "nc",
-];
+/// Fields every run has, in the order `--snapshot-fields` lists them
+/// (from the field table, [`sph_core::fields::FIELDS`]).
+pub fn base_fields() -> Vec<&'static str> {
+    let always = |f: &&Field| f.needs == Needs::Always;
+    FIELDS.iter().filter(always).map(|f| f.name).collect()
+}
 
-/// Fields only runs with the matching physics have: grad-h factor, AV
-/// switches, self-gravity, IAD matrices, referenced equation of state.
-pub const OPTIONAL_FIELDS: &[&str] = &[
-    "omega", "alpha", "phi", "c11", "c12", "c13", "c22", "c23", "c33", "rho0", "p0",
-];
+/// Fields only runs with the matching physics have: referenced equation
+/// of state, AV switches, grad-h factor, self-gravity, IAD matrices.
+pub fn optional_fields() -> Vec<&'static str> {
+    let optional = |f: &&Field| f.needs != Needs::Always;
+    FIELDS.iter().filter(optional).map(|f| f.name).collect()
+}
 
 /// The snapshot fields when `--snapshot-fields` is not given.
 pub const DEFAULT_FIELDS: &[&str] = &[
@@ -55,45 +58,14 @@ pub const DEFAULT_FIELDS: &[&str] = &[
 /// The values of field `name` of the particles `owned` of `p`, or `None`
 /// when the run does not have the field.
 pub fn field(p: &Particles, owned: Range<usize>, name: &str) -> Option<FieldData> {
-    let f = |v: &Vec<f64>| (v.len() == p.len()).then(|| FieldData::F64(v[owned.clone()].to_vec()));
-    match name {
-        "id" => Some(FieldData::U64(p.id[owned].to_vec())),
-        "nc" => Some(FieldData::U64(
-            p.nc[owned].iter().map(|&c| u64::from(c)).collect(),
-        )),
-        "x" => f(&p.x),
-        "y" => f(&p.y),
-        "z" => f(&p.z),
-        "vx" => f(&p.vx),
-        "vy" => f(&p.vy),
-        "vz" => f(&p.vz),
-        "dx" => f(&p.dx),
-        "dy" => f(&p.dy),
-        "dz" => f(&p.dz),
-        "h" => f(&p.h),
-        "m" => f(&p.m),
-        "u" => f(&p.u),
-        "rho" => f(&p.rho),
-        "p" => f(&p.p),
-        "c" => f(&p.c),
-        "ax" => f(&p.ax),
-        "ay" => f(&p.ay),
-        "az" => f(&p.az),
-        "du" => f(&p.du),
-        "du_prev" => f(&p.du_prev),
-        "omega" => f(&p.omega),
-        "alpha" => f(&p.alpha),
-        "phi" => f(&p.phi),
-        "c11" => f(&p.iad[0]),
-        "c12" => f(&p.iad[1]),
-        "c13" => f(&p.iad[2]),
-        "c22" => f(&p.iad[3]),
-        "c23" => f(&p.iad[4]),
-        "c33" => f(&p.iad[5]),
-        "rho0" => f(&p.eos_ref[0]),
-        "p0" => f(&p.eos_ref[1]),
-        _ => None,
-    }
+    let f = sph_core::fields::find(name).filter(|f| p.fields().holds(f.needs))?;
+    Some(match f.column {
+        Column::F64(get, _) => FieldData::F64(get(p)[owned].to_vec()),
+        Column::U64(get, _) => FieldData::U64(get(p)[owned].to_vec()),
+        Column::U32(get, _) => {
+            FieldData::U64(get(p)[owned].iter().map(|&c| u64::from(c)).collect())
+        }
+    })
 }
 
 /// Parses a `--snapshot-fields` list (`x,y,z,rho`): known names, each
@@ -104,11 +76,11 @@ pub fn field(p: &Particles, owned: Range<usize>, name: &str) -> Option<FieldData
 pub fn parse_fields(list: &str) -> Result<Vec<String>, String> {
     let mut out: Vec<String> = Vec::new();
     for name in list.split(',').map(str::trim) {
-        if !BASE_FIELDS.contains(&name) && !OPTIONAL_FIELDS.contains(&name) {
+        if sph_core::fields::find(name).is_none() {
             return Err(format!(
                 "unknown field '{name}'; fields: {} (and, where the run has them, {})",
-                BASE_FIELDS.join(","),
-                OPTIONAL_FIELDS.join(",")
+                base_fields().join(","),
+                optional_fields().join(",")
             ));
         }
         if out.iter().any(|n| n == name) {

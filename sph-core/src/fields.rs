@@ -1,0 +1,369 @@
+//! The particle field table: every per-particle array of
+//! [`Particles`](crate::Particles) declared once, with what it is.
+//!
+//! Each [`Field`] says its name in snapshots and checkpoints, its type, its
+//! [`Kind`] (what migration, halos, the space-filling-curve reordering and
+//! checkpoints do with it) and the condition ([`Needs`]) under which a run
+//! holds it. Storage, migration and halo packing, reordering, bytes per
+//! particle, the length check, and the checkpoint and snapshot field lists
+//! are all derived from [`FIELDS`]: declaring a new persistent field is one
+//! entry here and one `Vec` in `Particles`.
+//!
+//! ```
+//! use sph_core::fields::{self, Kind, Needs};
+//! use sph_core::{FieldSet, Particles};
+//!
+//! // What a checkpoint stores: the id, the persistent state and the
+//! // integrator's history, where the run holds them.
+//! let p = Particles::new(3, FieldSet::default());
+//! let names: Vec<&str> = fields::checkpointed(p.fields()).map(|f| f.name).collect();
+//! assert_eq!(&names[..4], &["id", "x", "y", "z"]);
+//! assert!(names.contains(&"du_prev") && !names.contains(&"alpha"));
+//!
+//! // Each field once, found by its name.
+//! let rho = fields::find("rho").unwrap();
+//! assert!(matches!(rho.kind, Kind::Derived { .. }) && rho.needs == Needs::Always);
+//! assert_eq!(rho.f64(&p).unwrap().len(), 3);
+//! ```
+
+use crate::Particles;
+
+/// What a field is, which decides where it travels.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Kind {
+    /// The particle's identity (`id`): migrates, travels with halos,
+    /// checkpointed, reordered with the particle.
+    Identity,
+    /// State carried from one step to the next: migrates, travels with
+    /// halos, checkpointed.
+    Persistent,
+    /// The integrator's history, set and read for owned particles only:
+    /// migrates and is checkpointed, but halos arrive with zeros.
+    History,
+    /// Recomputed every step before it is read: neither sent nor
+    /// checkpointed; a particle that arrives (or is reordered by the
+    /// domain's sort) gets `fill`.
+    Derived {
+        /// The value of an arriving particle.
+        fill: f64,
+    },
+}
+
+/// The condition under which a run holds a field.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Needs {
+    /// Every run.
+    Always,
+    /// IAD gradients (the inverse IAD matrix).
+    Iad,
+    /// Grad-h terms (the Omega factor).
+    GradH,
+    /// Self-gravity (the potential).
+    Gravity,
+    /// Artificial-viscosity switches (the per-particle strength alpha).
+    Switches,
+    /// An equation of state with a per-particle reference state
+    /// ([`Eos::TaitReferenced`](crate::Eos)).
+    ReferencedEos,
+}
+
+/// Which optional fields a run holds (one flag per [`Needs`] condition
+/// other than [`Needs::Always`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FieldSet {
+    /// The 6 components of the inverse IAD matrix.
+    pub iad: bool,
+    /// The grad-h factor Omega.
+    pub grad_h: bool,
+    /// The gravitational potential (self-gravity runs).
+    pub gravity: bool,
+    /// The per-particle viscosity strength (AV switches).
+    pub alpha: bool,
+    /// The reference density and pressure of a referenced EOS.
+    pub eos_ref: bool,
+}
+
+impl Default for FieldSet {
+    /// IAD and grad-h on (the paper's scheme), nothing else.
+    fn default() -> Self {
+        Self {
+            iad: true,
+            grad_h: true,
+            gravity: false,
+            alpha: false,
+            eos_ref: false,
+        }
+    }
+}
+
+impl FieldSet {
+    /// Whether a run with these flags holds fields that need `needs`.
+    pub fn holds(&self, needs: Needs) -> bool {
+        match needs {
+            Needs::Always => true,
+            Needs::Iad => self.iad,
+            Needs::GradH => self.grad_h,
+            Needs::Gravity => self.gravity,
+            Needs::Switches => self.alpha,
+            Needs::ReferencedEos => self.eos_ref,
+        }
+    }
+
+    /// The union of two sets (a field held by either).
+    pub fn union(self, other: FieldSet) -> FieldSet {
+        FieldSet {
+            iad: self.iad || other.iad,
+            grad_h: self.grad_h || other.grad_h,
+            gravity: self.gravity || other.gravity,
+            alpha: self.alpha || other.alpha,
+            eos_ref: self.eos_ref || other.eos_ref,
+        }
+    }
+}
+
+/// Read access to a field's array.
+pub type Get<T> = fn(&Particles) -> &Vec<T>;
+/// Write access to a field's array.
+pub type GetMut<T> = fn(&mut Particles) -> &mut Vec<T>;
+
+/// A field's array and its element type.
+#[derive(Debug, Clone, Copy)]
+pub enum Column {
+    /// 64-bit floats (every physical quantity).
+    F64(Get<f64>, GetMut<f64>),
+    /// 64-bit unsigned integers (the id).
+    U64(Get<u64>, GetMut<u64>),
+    /// 32-bit unsigned integers (the neighbour count).
+    U32(Get<u32>, GetMut<u32>),
+}
+
+/// One per-particle field.
+#[derive(Debug, Clone, Copy)]
+pub struct Field {
+    /// Name in snapshots, checkpoints and `--snapshot-fields`.
+    pub name: &'static str,
+    /// The SWIFT/GADGET-layout dataset (`PartType0/...`) and component
+    /// that holds the same quantity, where there is one (names only: unit
+    /// and convention differences are the reader's and writer's business).
+    pub swift: Option<(&'static str, u8)>,
+    /// What the field is.
+    pub kind: Kind,
+    /// When a run holds it.
+    pub needs: Needs,
+    /// Its array.
+    pub column: Column,
+    /// One line for listings.
+    pub doc: &'static str,
+}
+
+impl Field {
+    /// The field's `f64` array, `None` for the integer fields.
+    pub fn f64<'a>(&self, p: &'a Particles) -> Option<&'a Vec<f64>> {
+        match self.column {
+            Column::F64(get, _) => Some(get(p)),
+            _ => None,
+        }
+    }
+
+    /// The field's `f64` array for writing, `None` for the integer fields.
+    pub fn f64_mut<'a>(&self, p: &'a mut Particles) -> Option<&'a mut Vec<f64>> {
+        match self.column {
+            Column::F64(_, get) => Some(get(p)),
+            _ => None,
+        }
+    }
+
+    /// The number of entries the field's array holds.
+    pub fn len(&self, p: &Particles) -> usize {
+        match self.column {
+            Column::F64(get, _) => get(p).len(),
+            Column::U64(get, _) => get(p).len(),
+            Column::U32(get, _) => get(p).len(),
+        }
+    }
+
+    /// Bytes per particle of the field's array.
+    pub fn bytes(&self) -> usize {
+        match self.column {
+            Column::F64(..) | Column::U64(..) => 8,
+            Column::U32(..) => 4,
+        }
+    }
+
+    /// Whether the field is stored in checkpoints (identity, persistent
+    /// state and integrator history: what a restart needs to continue to
+    /// the bit).
+    pub fn checkpointed(&self) -> bool {
+        matches!(self.kind, Kind::Identity | Kind::Persistent | Kind::History)
+    }
+}
+
+macro_rules! field {
+    ($name:literal, $swift:expr, $kind:expr, $needs:expr, $ty:ident, $($path:tt)+) => {
+        Field {
+            name: $name,
+            swift: $swift,
+            kind: $kind,
+            needs: $needs,
+            column: Column::$ty(|p| &p.$($path)+, |p| &mut p.$($path)+),
+            doc: "",
+        }
+    };
+}
+
+const fn doc(mut f: Field, doc: &'static str) -> Field {
+    f.doc = doc;
+    f
+}
+
+use Kind::{History, Identity, Persistent};
+use Needs::{Always, GradH, Gravity, Iad, ReferencedEos, Switches};
+
+const DERIVED: Kind = Kind::Derived { fill: 0.0 };
+
+/// Every per-particle field, in the order of snapshot listings; migration
+/// and halo messages pack the sent fields in this order too, checkpoints
+/// store theirs in it.
+#[rustfmt::skip]
+pub const FIELDS: &[Field] = &[
+    doc(field!("id", Some(("ParticleIDs", 0)), Identity, Always, U64, id), "unique particle id"),
+    doc(field!("x", Some(("Coordinates", 0)), Persistent, Always, F64, x), "position"),
+    doc(field!("y", Some(("Coordinates", 1)), Persistent, Always, F64, y), "position"),
+    doc(field!("z", Some(("Coordinates", 2)), Persistent, Always, F64, z), "position"),
+    doc(field!("vx", Some(("Velocities", 0)), Persistent, Always, F64, vx), "velocity"),
+    doc(field!("vy", Some(("Velocities", 1)), Persistent, Always, F64, vy), "velocity"),
+    doc(field!("vz", Some(("Velocities", 2)), Persistent, Always, F64, vz), "velocity"),
+    doc(field!("h", Some(("SmoothingLengths", 0)), Persistent, Always, F64, h), "smoothing length"),
+    doc(field!("m", Some(("Masses", 0)), Persistent, Always, F64, m), "mass"),
+    doc(field!("u", Some(("InternalEnergies", 0)), Persistent, Always, F64, u), "specific internal energy"),
+    doc(field!("dx", None, History, Always, F64, dx), "position change of the last step"),
+    doc(field!("dy", None, History, Always, F64, dy), "position change of the last step"),
+    doc(field!("dz", None, History, Always, F64, dz), "position change of the last step"),
+    doc(field!("du_prev", None, History, Always, F64, du_prev), "du/dt of the previous step"),
+    doc(field!("alpha", Some(("ViscosityParameters", 0)), Persistent, Switches, F64, alpha), "artificial-viscosity strength"),
+    doc(field!("rho0", None, Persistent, ReferencedEos, F64, eos_ref[0]), "reference density of the referenced EOS (0: from the first density)"),
+    doc(field!("p0", None, Persistent, ReferencedEos, F64, eos_ref[1]), "reference pressure of the referenced EOS"),
+    doc(field!("rho", Some(("Densities", 0)), DERIVED, Always, F64, rho), "density"),
+    doc(field!("p", Some(("Pressures", 0)), DERIVED, Always, F64, p), "pressure"),
+    doc(field!("c", Some(("SoundSpeeds", 0)), DERIVED, Always, F64, c), "sound speed"),
+    doc(field!("ax", Some(("Accelerations", 0)), DERIVED, Always, F64, ax), "acceleration"),
+    doc(field!("ay", Some(("Accelerations", 1)), DERIVED, Always, F64, ay), "acceleration"),
+    doc(field!("az", Some(("Accelerations", 2)), DERIVED, Always, F64, az), "acceleration"),
+    doc(field!("du", None, DERIVED, Always, F64, du), "du/dt of this step"),
+    doc(field!("nc", None, DERIVED, Always, U32, nc), "neighbour count of the last search (self included)"),
+    doc(field!("omega", None, Kind::Derived { fill: 1.0 }, GradH, F64, omega), "grad-h factor"),
+    doc(field!("phi", Some(("Potentials", 0)), DERIVED, Gravity, F64, phi), "gravitational potential per unit mass"),
+    doc(field!("c11", None, DERIVED, Iad, F64, iad[0]), "inverse IAD matrix, xx"),
+    doc(field!("c12", None, DERIVED, Iad, F64, iad[1]), "inverse IAD matrix, xy"),
+    doc(field!("c13", None, DERIVED, Iad, F64, iad[2]), "inverse IAD matrix, xz"),
+    doc(field!("c22", None, DERIVED, Iad, F64, iad[3]), "inverse IAD matrix, yy"),
+    doc(field!("c23", None, DERIVED, Iad, F64, iad[4]), "inverse IAD matrix, yz"),
+    doc(field!("c33", None, DERIVED, Iad, F64, iad[5]), "inverse IAD matrix, zz"),
+];
+
+/// The field called `name`.
+pub fn find(name: &str) -> Option<&'static Field> {
+    FIELDS.iter().find(|f| f.name == name)
+}
+
+/// The fields a run with `set` holds.
+pub fn held(set: FieldSet) -> impl Iterator<Item = &'static Field> {
+    FIELDS.iter().filter(move |f| set.holds(f.needs))
+}
+
+/// The fields a checkpoint of a run with `set` stores.
+pub fn checkpointed(set: FieldSet) -> impl Iterator<Item = &'static Field> {
+    held(set).filter(|f| f.checkpointed())
+}
+
+/// The held `f64` fields a migrating particle carries (`history: true`)
+/// or a halo carries (`false`: without the integrator's history), in
+/// packing order.
+pub(crate) fn sent(set: FieldSet, history: bool) -> impl Iterator<Item = &'static Field> {
+    held(set).filter(move |f| {
+        matches!(f.column, Column::F64(..))
+            && (f.kind == Persistent || (history && f.kind == History))
+    })
+}
+
+/// The held `f64` fields with the value an arriving particle gets: `None`
+/// for the sent ones (taken from the message; a halo's history is 0),
+/// `Some(fill)` for the derived ones.
+pub(crate) fn f64_fields(set: FieldSet) -> impl Iterator<Item = (GetMut<f64>, Kind)> {
+    held(set).filter_map(|f| match f.column {
+        Column::F64(_, get) => Some((get, f.kind)),
+        _ => None,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_name_is_unique_and_every_accessor_its_own_array() {
+        let mut p = Particles::new(
+            2,
+            FieldSet {
+                iad: true,
+                grad_h: true,
+                gravity: true,
+                alpha: true,
+                eos_ref: true,
+            },
+        );
+        for (k, f) in FIELDS.iter().enumerate() {
+            assert!(
+                FIELDS[k + 1..].iter().all(|g| g.name != f.name),
+                "{} twice",
+                f.name
+            );
+            assert_eq!(f.len(&p), 2, "{}", f.name);
+            // Mark this field's array and check no other field sees it.
+            if let Some(v) = f.f64_mut(&mut p) {
+                v[1] = 1000.0 + k as f64;
+            }
+        }
+        for (k, f) in FIELDS.iter().enumerate() {
+            if let Some(v) = f.f64(&p) {
+                assert_eq!(v[1], 1000.0 + k as f64, "{}", f.name);
+            }
+        }
+    }
+
+    #[test]
+    fn the_table_covers_every_array_of_particles() {
+        // Each `Vec` is 24 bytes; Particles adds the FieldSet (5 flags,
+        // padded to 8). A new array without a table entry fails here.
+        let arrays = FIELDS.len();
+        assert_eq!(
+            std::mem::size_of::<Particles>(),
+            arrays * std::mem::size_of::<Vec<f64>>() + 8,
+            "Particles has an array the field table does not list"
+        );
+    }
+
+    #[test]
+    fn a_set_holds_exactly_its_conditions() {
+        let none = FieldSet {
+            iad: false,
+            grad_h: false,
+            gravity: false,
+            alpha: false,
+            eos_ref: false,
+        };
+        assert!(held(none).all(|f| f.needs == Needs::Always));
+        let names: Vec<_> = held(FieldSet {
+            alpha: true,
+            ..none
+        })
+        .filter(|f| f.needs != Needs::Always)
+        .map(|f| f.name)
+        .collect();
+        assert_eq!(names, ["alpha"]);
+        // A halo carries 4 words fewer than a migrating particle.
+        for set in [none, FieldSet::default()] {
+            assert_eq!(sent(set, true).count() - sent(set, false).count(), 4);
+        }
+    }
+}
