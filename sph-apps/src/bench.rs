@@ -10,6 +10,7 @@
 //! `l1_*` columns; `case`, `scheme`, `kernel` name its series): its points
 //! are drawn over the plot.
 
+use crate::plot::{BenchLine, BenchPanel};
 use crate::AppError;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -439,14 +440,56 @@ impl Report {
         let path = out.join("bench.json");
         let json = serde_json::to_string_pretty(self).expect("report serialises");
         std::fs::write(&path, json + "\n").map_err(|e| AppError::io(&path, e))?;
-        crate::plot::bench_png(
-            &out.join("error_vs_time.png"),
-            title,
-            &self.runs,
-            self.reference.as_deref().unwrap_or(&[]),
-            &self.orders,
-        )
+        crate::plot::bench_png(&out.join("error_vs_time.png"), title, &self.panels())
     }
+
+    /// The panels of `error_vs_time.png`: per L1 field, one line per
+    /// series (the median over repeats at each size, its fitted order in
+    /// the legend) and the reference code's lines.
+    fn panels(&self) -> Vec<BenchPanel> {
+        let reference = self.reference.as_deref().unwrap_or(&[]);
+        L1_FIELDS
+            .iter()
+            .map(|&(field, label)| {
+                let runs = lines(&self.runs, field)
+                    .into_iter()
+                    .map(|(series, pts)| {
+                        let order = self
+                            .orders
+                            .iter()
+                            .find(|o| o.series == series && o.field == field)
+                            .map_or(String::new(), |o| format!(" (order {:.2})", o.order));
+                        (format!("{series}{order}"), pts)
+                    })
+                    .collect();
+                BenchPanel {
+                    label,
+                    runs,
+                    reference: lines(reference, field),
+                }
+            })
+            .collect()
+    }
+}
+
+/// (series, [(N, wall median, L1 median)]) of `rows` for `field`, the
+/// points with a positive finite wall time and L1 only.
+fn lines(rows: &[Row], field: &str) -> Vec<BenchLine> {
+    grouped(rows)
+        .into_iter()
+        .map(|(series, by_n)| {
+            let pts = by_n
+                .into_iter()
+                .map(|(n, rs)| {
+                    let mut w: Vec<f64> = rs.iter().map(|r| r.wall_s).collect();
+                    let mut l: Vec<f64> = rs.iter().map(|r| r.l1(field)).collect();
+                    (n, median(&mut w), median(&mut l))
+                })
+                .filter(|p| p.1 > 0.0 && p.2 > 0.0 && p.1.is_finite() && p.2.is_finite())
+                .collect();
+            (series, pts)
+        })
+        .collect()
 }
 
 #[cfg(test)]

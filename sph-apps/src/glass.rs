@@ -33,7 +33,8 @@
 //! # Ok::<(), sph_apps::AppError>(())
 //! ```
 
-use crate::cases::{field_set, initial_h, Physics, SchemeOverrides, Share};
+use crate::cases::scheme::{Physics, SchemeOverrides};
+use crate::cases::setup::{initial_h, Share};
 use crate::rng::SplitMix64;
 use crate::AppError;
 use serde::Serialize;
@@ -237,7 +238,7 @@ pub fn relax(
         ..Scheme::PAPER
     };
     SchemeOverrides::default().apply(scheme, Physics::IDEAL_GAS, &mut config);
-    let (mut p, _) = Share::WHOLE.particles(n, field_set(&config));
+    let (mut p, _) = Share::WHOLE.particles(n, config.fields());
     let mut rng = SplitMix64(0x5EED ^ n as u64);
     let h0 = initial_h(spec.ng0, 1.0, n);
     const U: f64 = 1.0;

@@ -357,46 +357,28 @@ const REFERENCE_COLORS: [RGBColor; 3] = [
     RGBColor(127, 127, 127),
 ];
 
-/// Writes `error_vs_time.png`: one panel per L1 field (side by side), L1
-/// against wall time on log-log axes; one line per series of `runs` (case,
-/// scheme, kernel; the median over repeats at each size, each point
-/// labelled with the side N^(1/3)) with its fitted order in the legend,
-/// and the points of `reference` (another code's, same columns) as hollow
-/// squares in colours of their own; the legend sits above the lines.
-pub fn bench_png(
-    path: &Path,
-    title: &str,
-    runs: &[crate::bench::Row],
-    reference: &[crate::bench::Row],
-    orders: &[crate::bench::Order],
-) -> Result<(), AppError> {
-    render_bench(path, title, runs, reference, orders)
-        .map_err(|e| AppError::io(path, std::io::Error::other(e.to_string())))
+/// One line of an error-against-time panel: its legend label and its
+/// points `(N, wall time, L1)`.
+pub type BenchLine = (String, Vec<(u64, f64, f64)>);
+
+/// One panel of [`bench_png`]: the axis label of its L1 field, the lines
+/// of our runs and those of a reference code.
+#[derive(Debug, Clone)]
+pub struct BenchPanel {
+    /// The y axis label.
+    pub label: &'static str,
+    /// Our runs' lines (solid, filled points).
+    pub runs: Vec<BenchLine>,
+    /// Another code's lines (thin, hollow squares, colours of their own).
+    pub reference: Vec<BenchLine>,
 }
 
-/// (series, [(N, wall median, L1 median)]) of `rows` for `field`.
-type BenchLine = (String, Vec<(u64, f64, f64)>);
-
-fn bench_lines(rows: &[crate::bench::Row], field: &str) -> Vec<BenchLine> {
-    crate::bench::grouped(rows)
-        .into_iter()
-        .map(|(series, by_n)| {
-            let pts = by_n
-                .into_iter()
-                .map(|(n, rs)| {
-                    let mut w: Vec<f64> = rs.iter().map(|r| r.wall_s).collect();
-                    let mut l: Vec<f64> = rs.iter().map(|r| r.l1(field)).collect();
-                    (
-                        n,
-                        crate::bench::median(&mut w),
-                        crate::bench::median(&mut l),
-                    )
-                })
-                .filter(|p| p.1 > 0.0 && p.2 > 0.0 && p.1.is_finite() && p.2.is_finite())
-                .collect();
-            (series, pts)
-        })
-        .collect()
+/// Writes `error_vs_time.png`: the `panels` side by side, L1 against wall
+/// time on log-log axes, each point labelled with the side N^(1/3); the
+/// legend sits above the lines.
+pub fn bench_png(path: &Path, title: &str, panels: &[BenchPanel]) -> Result<(), AppError> {
+    render_bench(path, title, panels)
+        .map_err(|e| AppError::io(path, std::io::Error::other(e.to_string())))
 }
 
 /// A tick label of a log axis: three significant digits, no trailing
@@ -449,26 +431,30 @@ fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo / 1.25, hi * 1.25)
 }
 
-fn render_bench(
-    path: &Path,
-    title: &str,
-    runs: &[crate::bench::Row],
-    reference: &[crate::bench::Row],
-    orders: &[crate::bench::Order],
-) -> Result<(), Box<dyn Error>> {
+fn render_bench(path: &Path, title: &str, panels: &[BenchPanel]) -> Result<(), Box<dyn Error>> {
     register_font()?;
-    let fields = crate::bench::L1_FIELDS;
-    let root = BitMapBackend::new(path, (600 * fields.len() as u32, 640)).into_drawing_area();
+    let n = panels.len().max(1);
+    let root = BitMapBackend::new(path, (600 * n as u32, 640)).into_drawing_area();
     root.fill(&WHITE)?;
     let body = root.titled(title, (FAMILY, 26))?;
-    let all = || runs.iter().chain(reference);
-    let (x_lo, x_hi) = log_range(all().map(|r| r.wall_s));
+    let points = |p: &BenchPanel| {
+        let lines: Vec<(u64, f64, f64)> = p
+            .runs
+            .iter()
+            .chain(&p.reference)
+            .flat_map(|l| l.1.clone())
+            .collect();
+        lines
+    };
+    let (x_lo, x_hi) = log_range(panels.iter().flat_map(points).map(|p| p.1));
     // The legend gets the top of each panel to itself: the y range grows
     // upwards by its share of the height (about 21 px a line of ~540).
-    let entries = bench_lines(runs, "l1_rho").len() + bench_lines(reference, "l1_rho").len();
+    let entries = panels
+        .first()
+        .map_or(0, |p| p.runs.len() + p.reference.len());
     let legend_share = ((entries as f64 * 21.0 + 16.0) / 540.0).min(0.5);
-    for ((field, label), area) in fields.iter().zip(body.split_evenly((1, fields.len()))) {
-        let (y_lo, y_hi) = log_range(all().map(|r| r.l1(field)));
+    for (panel, area) in panels.iter().zip(body.split_evenly((1, n))) {
+        let (y_lo, y_hi) = log_range(points(panel).into_iter().map(|p| p.2));
         let y_hi = y_hi * (y_hi / y_lo).powf(legend_share / (1.0 - legend_share));
         let mut chart = ChartBuilder::on(&area)
             .margin(8)
@@ -486,7 +472,7 @@ fn render_bench(
         chart
             .configure_mesh()
             .x_desc("wall time (s)")
-            .y_desc(*label)
+            .y_desc(panel.label)
             .x_label_formatter(&|v| log_tick(*v))
             .y_label_formatter(&|v| log_tick(*v))
             .label_style((FAMILY, 15))
@@ -495,22 +481,18 @@ fn render_bench(
             .light_line_style(RGBColor(235, 235, 235))
             .draw()?;
         let mut any = false;
-        for (k, (series, pts)) in bench_lines(runs, field).into_iter().enumerate() {
+        for (k, (legend, pts)) in panel.runs.iter().enumerate() {
             if pts.is_empty() {
                 continue;
             }
             any = true;
             let colour = SERIES_COLORS[k % SERIES_COLORS.len()];
-            let order = orders
-                .iter()
-                .find(|o| o.series == series && o.field == *field)
-                .map_or(String::new(), |o| format!(" (order {:.2})", o.order));
             chart
                 .draw_series(LineSeries::new(
                     pts.iter().map(|p| (p.1, p.2)),
                     colour.stroke_width(2),
                 ))?
-                .label(format!("{series}{order}"))
+                .label(legend)
                 .legend(move |(x, y)| {
                     PathElement::new(vec![(x, y), (x + 24, y)], colour.stroke_width(2))
                 });
@@ -527,7 +509,7 @@ fn render_bench(
                     )
             }))?;
         }
-        for (k, (series, pts)) in bench_lines(reference, field).into_iter().enumerate() {
+        for (k, (legend, pts)) in panel.reference.iter().enumerate() {
             if pts.is_empty() {
                 continue;
             }
@@ -538,7 +520,7 @@ fn render_bench(
                     pts.iter().map(|p| (p.1, p.2)),
                     colour.stroke_width(1),
                 ))?
-                .label(format!("{series} (reference)"))
+                .label(format!("{legend} (reference)"))
                 .legend(move |(x, y)| Rectangle::new([(x + 7, y - 5), (x + 17, y + 5)], colour));
             chart.draw_series(pts.iter().map(|p| {
                 let (x, y) = (p.1, p.2);

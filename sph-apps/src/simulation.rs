@@ -26,23 +26,9 @@ use sph_kernels::FastKernel;
 use std::path::Path;
 use std::time::Instant;
 
-/// When a run stops.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Stop {
-    /// After this many steps.
-    Steps(u64),
-    /// When the time reaches this value (the last step is shortened).
-    Time(f64),
-}
-
-/// How a run reports progress.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Progress {
-    /// A bar when stderr is a terminal, log lines otherwise.
-    Auto,
-    /// Nothing.
-    Quiet,
-}
+pub use crate::output::energies::EnergyCheck;
+pub use crate::output::progress::{Progress, Stop};
+pub use crate::output::timings::DomainSummary;
 
 /// Everything the summary holds; written as `summary.json`.
 #[derive(Debug, Clone, Serialize)]
@@ -171,44 +157,6 @@ pub struct Outputs {
     pub checkpoints: Option<(CheckpointEvery, usize)>,
     /// Attributes of every snapshot and checkpoint (the run's settings).
     pub attrs: Vec<(String, Attr)>,
-}
-
-/// The run's energies at a reference time, beside the reference values.
-#[derive(Debug, Clone, Copy, Serialize)]
-pub struct EnergyCheck {
-    /// Time.
-    pub t: f64,
-    /// Kinetic energy of the run.
-    pub e_kin: f64,
-    /// Internal energy of the run.
-    pub e_int: f64,
-    /// Gravitational energy of the run.
-    pub e_grav: f64,
-    /// Reference kinetic energy.
-    pub e_kin_ref: f64,
-    /// Reference internal energy.
-    pub e_int_ref: f64,
-    /// Reference gravitational energy.
-    pub e_grav_ref: f64,
-}
-
-/// Decomposition figures of a run (means over steps 2..N).
-#[derive(Debug, Clone, Copy, Default, Serialize)]
-pub struct DomainSummary {
-    /// Fewest particles on a rank (last step).
-    pub owned_min: usize,
-    /// Most particles on a rank (last step).
-    pub owned_max: usize,
-    /// Mean over steps of total halos / total owned.
-    pub halo_ratio_mean: f64,
-    /// Mean over steps of the largest halos / owned of a rank.
-    pub halo_ratio_max: f64,
-    /// Mean bytes sent per step, all ranks together.
-    pub bytes_sent_per_step: f64,
-    /// Mean over steps of the longest per-rank time in domain communication.
-    pub comm_seconds_per_step: f64,
-    /// Mean over steps of the longest per-rank time in `sync`.
-    pub sync_seconds_per_step: f64,
 }
 
 /// A run in progress: the scene's particles (this rank's share) and the

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use crate::snapshot::FieldType;
+use crate::field_type::FieldType;
 
 /// Everything that can go wrong writing or reading a snapshot. Errors about a
 /// file name the file and, where they apply, the step group and the field.

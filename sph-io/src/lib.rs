@@ -78,6 +78,7 @@
 //! ```
 
 mod error;
+mod field_type;
 pub mod foreign;
 pub mod h5part;
 #[cfg(feature = "hdf5-c")]

@@ -1,6 +1,7 @@
 //! The format-independent data model: one [`Snapshot`] is one output step.
 
 use crate::error::IoError;
+pub use crate::field_type::FieldType;
 
 /// Simulation box: lower and upper corners and, per axis, whether the
 /// boundary is periodic.
@@ -50,24 +51,6 @@ impl Attr {
             }
             _ => false,
         }
-    }
-}
-
-/// Element type of a field.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum FieldType {
-    /// 64-bit IEEE float.
-    F64,
-    /// 64-bit unsigned integer (particle ids, keys).
-    U64,
-}
-
-impl std::fmt::Display for FieldType {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            FieldType::F64 => "f64",
-            FieldType::U64 => "u64",
-        })
     }
 }
 

@@ -2,11 +2,29 @@
 //! reference table (in `summary.json`) and `energies.png`.
 
 use crate::cases::EnergyPoint;
-use crate::simulation::EnergyCheck;
 use crate::AppError;
 use plotters::style::RGBColor;
 use sph_core::Conserved;
 use std::path::Path;
+
+/// The run's energies at a reference time, beside the reference values.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct EnergyCheck {
+    /// Time.
+    pub t: f64,
+    /// Kinetic energy of the run.
+    pub e_kin: f64,
+    /// Internal energy of the run.
+    pub e_int: f64,
+    /// Gravitational energy of the run.
+    pub e_grav: f64,
+    /// Reference kinetic energy.
+    pub e_kin_ref: f64,
+    /// Reference internal energy.
+    pub e_int_ref: f64,
+    /// Reference gravitational energy.
+    pub e_grav_ref: f64,
+}
 
 /// `[t, E_kin, E_int, E_grav]` of every step (a few numbers per step, the
 /// same on every rank).

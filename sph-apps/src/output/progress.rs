@@ -1,10 +1,27 @@
 //! Progress of a run on stderr: a bar on a terminal, a log line every few
 //! seconds otherwise.
 
-use crate::simulation::{Progress, Stop};
 use sph_core::StepReport;
 use std::io::IsTerminal;
 use std::time::Instant;
+
+/// When a run stops.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Stop {
+    /// After this many steps.
+    Steps(u64),
+    /// When the time reaches this value (the last step is shortened).
+    Time(f64),
+}
+
+/// How a run reports progress.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Progress {
+    /// A bar when stderr is a terminal, log lines otherwise.
+    Auto,
+    /// Nothing.
+    Quiet,
+}
 
 /// Reports the steps of a run (rank 0 only; other ranks pass
 /// [`Progress::Quiet`]).

@@ -3,11 +3,29 @@
 //! and as means over steps 2..N (step 1 holds set-up costs).
 
 use super::CsvFile;
-use crate::simulation::DomainSummary;
 use crate::AppError;
 use sph_core::{StepReport, STAGES};
 use std::collections::BTreeMap;
 use std::path::Path;
+
+/// Decomposition figures of a run (means over steps 2..N).
+#[derive(Debug, Clone, Copy, Default, serde::Serialize)]
+pub struct DomainSummary {
+    /// Fewest particles on a rank (last step).
+    pub owned_min: usize,
+    /// Most particles on a rank (last step).
+    pub owned_max: usize,
+    /// Mean over steps of total halos / total owned.
+    pub halo_ratio_mean: f64,
+    /// Mean over steps of the largest halos / owned of a rank.
+    pub halo_ratio_max: f64,
+    /// Mean bytes sent per step, all ranks together.
+    pub bytes_sent_per_step: f64,
+    /// Mean over steps of the longest per-rank time in domain communication.
+    pub comm_seconds_per_step: f64,
+    /// Mean over steps of the longest per-rank time in `sync`.
+    pub sync_seconds_per_step: f64,
+}
 
 /// Sums of the per-step figures over steps 2..N, and the last step's.
 #[derive(Debug, Clone)]
