@@ -102,9 +102,10 @@
 //! assert!(alpha.iter().all(|&a| a >= params.alpha_min));
 //! ```
 
-use crate::density::Positions;
+use crate::flow::Flow;
+pub use crate::flow::FlowState;
 use crate::iad::{store_matrices, FirstSingular, Singular, Tau, TauSums};
-use crate::momentum::{Flow, Gradients, HydroState};
+use crate::pair_loop::Gradients;
 use crate::pair_loop::{
     neighbour_lanes, sym_mat_vec, with_gradients, F64s, Group, PairStage, WithGradients, LANES,
 };
@@ -276,40 +277,6 @@ pub fn balsara(div_v: f64, curl_v: f64, c: f64, h: f64) -> f64 {
         d / denom
     } else {
         0.0
-    }
-}
-
-/// The per-particle state the switch stages read.
-#[derive(Debug, Clone, Copy)]
-pub struct FlowState<'a> {
-    /// Positions, smoothing lengths and masses.
-    pub pos: Positions<'a>,
-    /// Velocity x.
-    pub vx: &'a [f64],
-    /// Velocity y.
-    pub vy: &'a [f64],
-    /// Velocity z.
-    pub vz: &'a [f64],
-    /// Density (volumes `m / rho`).
-    pub rho: &'a [f64],
-    /// Sound speed (read by the second pass only).
-    pub c: &'a [f64],
-    /// Inverse IAD matrices `(xx, xy, xz, yy, yz, zz)` (read with
-    /// [`Gradients::Iad`] only).
-    pub iad: [&'a [f64]; 6],
-}
-
-impl<'a> From<HydroState<'a>> for FlowState<'a> {
-    fn from(s: HydroState<'a>) -> Self {
-        Self {
-            pos: s.pos,
-            vx: s.vx,
-            vy: s.vy,
-            vz: s.vz,
-            rho: s.rho,
-            c: s.c,
-            iad: s.iad,
-        }
     }
 }
 

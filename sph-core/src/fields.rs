@@ -1,5 +1,5 @@
 //! The particle field table: every per-particle array of
-//! [`Particles`](crate::Particles) declared once, with what it is.
+//! [`Particles`] declared once, with what it is.
 //!
 //! Each [`Field`] says its name in snapshots and checkpoints, its type, its
 //! [`Kind`] (what migration, halos, the space-filling-curve reordering and

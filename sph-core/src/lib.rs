@@ -57,6 +57,7 @@ pub mod density;
 pub mod eos;
 mod error;
 pub mod fields;
+mod flow;
 pub mod geometry;
 pub mod hydro;
 pub mod iad;
