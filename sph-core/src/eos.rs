@@ -14,6 +14,7 @@ fn tait(rho: f64, rho0: f64, c0: f64, p0: f64) -> (f64, f64) {
 
 /// An equation of state.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub enum Eos {
     /// `P = (gamma - 1) rho u`, `c = sqrt(gamma P / rho)`.
     IdealGas {

@@ -5,6 +5,7 @@ use sph_tree::TreeError;
 /// A numerical failure or bad input, naming the particle (by its id) and
 /// the step where it happened.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum CoreError {
     /// A quantity became NaN or infinite.
     #[error("step {step}: particle id {id} has a non-finite {field} ({value})")]

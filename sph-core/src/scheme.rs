@@ -32,6 +32,7 @@ use serde::{Deserialize, Serialize};
 /// The artificial viscosity of the momentum and energy equations.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
+#[non_exhaustive]
 pub enum Viscosity {
     /// One strength `alpha` for every pair (the seed paper's eq. 5).
     Constant {
@@ -46,6 +47,7 @@ pub enum Viscosity {
 /// The particle volumes the sums are built with.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
+#[non_exhaustive]
 pub enum Volume {
     /// `V_j = m_j / rho_j` with `rho_i = sum_j m_j W_ij` (the seed paper).
     #[default]
@@ -75,6 +77,7 @@ pub enum Volume {
 /// `w_ij < 0`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
+#[non_exhaustive]
 pub enum AvForm {
     /// The seed paper's: `Pi'_ij = -alpha_ij/2 (c_i + c_j - 3 w_ij) w_ij`;
     /// Courant `v_sig,i = max(c_i, max_j (c_i + c_j - 3 min(w_ij, 0)))`;
@@ -88,6 +91,27 @@ pub enum AvForm {
     /// expansion `max_i max(div v_i, 0)` (SPH-EXA takes the largest signed
     /// `div v`, which is the same whenever some particle expands).
     SphExa,
+}
+
+impl Volume {
+    /// The name on the command line and in `config.toml` (`--volume`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Volume::Mass => "mass",
+            Volume::Generalised => "ve",
+            Volume::PressureEnergy => "pressure-energy",
+        }
+    }
+}
+
+impl AvForm {
+    /// The name on the command line and in `config.toml` (`--av-form`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            AvForm::Paper => "paper",
+            AvForm::SphExa => "sph-exa",
+        }
+    }
 }
 
 /// Everything that defines the discretisation of the hydrodynamics.

@@ -1014,13 +1014,13 @@ fn scheme_options(s: &Scheme, physics: Physics) -> String {
         text += " --smoothing-length fixed";
     }
     if s.volume != Volume::Mass {
-        text += &format!(" --volume {}", volume_name(s.volume));
+        text += &format!(" --volume {}", s.volume.name());
     }
     if s.av_cleaning {
         text += " --av-cleaning on";
     }
     if s.av_form != AvForm::Paper {
-        text += &format!(" --av-form {}", av_form_name(s.av_form));
+        text += &format!(" --av-form {}", s.av_form.name());
     }
     if let Some(soft) = physics.softening {
         text += &format!(" --softening {soft} (self-gravity)");
@@ -1036,23 +1036,6 @@ fn first_step_name(f: FirstStep) -> &'static str {
     match f {
         FirstStep::Ramp => "ramp",
         FirstStep::Criteria => "criteria",
-    }
-}
-
-/// The `--av-form` value of `f`.
-fn av_form_name(f: AvForm) -> &'static str {
-    match f {
-        AvForm::Paper => "paper",
-        AvForm::SphExa => "sph-exa",
-    }
-}
-
-/// The `--volume` value of `v`.
-fn volume_name(v: Volume) -> &'static str {
-    match v {
-        Volume::Mass => "mass",
-        Volume::Generalised => "ve",
-        Volume::PressureEnergy => "pressure-energy",
     }
 }
 
@@ -1325,9 +1308,9 @@ fn resolved_config(
         "smoothing-length",
         Value::String(if s.fixed_h { "fixed" } else { "adaptive" }.into()),
     );
-    set("volume", Value::String(volume_name(s.volume).into()));
+    set("volume", Value::String(s.volume.name().into()));
     set("av-cleaning", on(s.av_cleaning));
-    set("av-form", Value::String(av_form_name(s.av_form).into()));
+    set("av-form", Value::String(s.av_form.name().into()));
     set("theta", Value::Float(a.theta));
     if let Some(g) = config.gravity {
         set("softening", Value::Float(g.softening));
