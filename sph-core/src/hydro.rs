@@ -1050,6 +1050,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         p: &mut Particles,
         bbox: &mut BoundingBox,
     ) -> Result<(), CoreError> {
+        p.check(self.config.fields())?;
         self.release_step_buffers();
         let owned = self.domain.sync_with(p, bbox, self.next_h_max.take())?;
         self.tree
@@ -1187,15 +1188,11 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
     /// per-particle reference state calibrates reference densities left at
     /// zero to the current density.
     fn eos(&self, p: &mut Particles, owned: Range<usize>) -> Result<(), CoreError> {
-        let n = p.len();
         let r = owned;
         let reference = if self.config.eos.needs_reference() {
-            if p.eos_ref[0].len() != n || p.eos_ref[1].len() != n {
-                return Err(CoreError::Invalid(format!(
-                    "equation of state {:?} needs per-particle reference density and pressure (eos_ref) for all {n} particles",
-                    self.config.eos
-                )));
-            }
+            // The field table's check at the start of `step` and
+            // `evaluate_density` (HydroConfig::fields holds eos_ref) made
+            // sure the reference state is there.
             for i in r.clone() {
                 if p.eos_ref[0][i] == 0.0 {
                     p.eos_ref[0][i] = p.rho[i];
