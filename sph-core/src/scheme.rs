@@ -25,6 +25,7 @@
 //! ```
 
 use crate::av_switch::AvSwitchParams;
+pub use crate::momentum::{AvForm, Volume};
 use crate::pair_loop::Gradients;
 use crate::{CoreError, FieldSet};
 use serde::{Deserialize, Serialize};
@@ -42,76 +43,6 @@ pub enum Viscosity {
     /// A strength per particle, raised ahead of shocks and decaying
     /// elsewhere ([`av_switch`](crate::av_switch)); pairs use the mean.
     Switched(AvSwitchParams),
-}
-
-/// The particle volumes the sums are built with.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-#[non_exhaustive]
-pub enum Volume {
-    /// `V_j = m_j / rho_j` with `rho_i = sum_j m_j W_ij` (the seed paper).
-    #[default]
-    Mass,
-    /// SPH-EXA's generalised volume elements ("ve"): `X_i = m_i / rho0_i`
-    /// with the standard density `rho0_i`, the normalisation
-    /// `k_i = sum_j X_j W_ij`, the density `rho_i = k_i m_i / X_i`, volumes
-    /// `V_j = X_j / k_j` in grad-h and IAD, and momentum weights blended
-    /// from `X_i^2, X_j^2` to `X_i X_j` by the Atwood number
-    /// ([`density::ve_density`](crate::density::ve_density),
-    /// [`momentum`](crate::momentum)).
-    Generalised,
-    /// Pressure-energy volumes (Saitoh & Makino 2013, Hopkins 2013):
-    /// `X_i = m_i u_i`, so `k_i = sum_j m_j u_j W_ij` is the smoothed
-    /// `P / (gamma - 1)` and stays smooth across a contact discontinuity
-    /// where the mass-weighted density jumps; `rho_i = k_i m_i / X_i`,
-    /// volumes `V_j = X_j / k_j`, and the momentum and energy equations
-    /// in Hopkins's scale-free form (pair weights `X_i X_j / (k_i^2 m_i)`,
-    /// see [`momentum`](crate::momentum)). For contacts and shear layers
-    /// in pressure equilibrium (isobaric cube, Kelvin-Helmholtz); it needs
-    /// `u > 0` everywhere.
-    PressureEnergy,
-}
-
-/// The form of the artificial viscosity and of the Courant signal
-/// velocity (`w_ij = v_ij . x_ij / r_ij`, pairs approaching when
-/// `w_ij < 0`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-#[non_exhaustive]
-pub enum AvForm {
-    /// The seed paper's: `Pi'_ij = -alpha_ij/2 (c_i + c_j - 3 w_ij) w_ij`;
-    /// Courant `v_sig,i = max(c_i, max_j (c_i + c_j - 3 min(w_ij, 0)))`;
-    /// density criterion on `max_i |div v_i|`.
-    #[default]
-    Paper,
-    /// SPH-EXA's `hydro_ve`: `Pi'_ij = -(alpha_ij/2 (c_i + c_j) - 2 w_ij) w_ij`
-    /// (`beta = 2` not scaled by `alpha`); Courant
-    /// `v_sig,i = max_j ((c_i + c_j)/2 - 2 w_ij)` over all neighbours (`c_i`
-    /// when that is not positive); density criterion on the largest
-    /// expansion `max_i max(div v_i, 0)` (SPH-EXA takes the largest signed
-    /// `div v`, which is the same whenever some particle expands).
-    SphExa,
-}
-
-impl Volume {
-    /// The name on the command line and in `config.toml` (`--volume`).
-    pub fn name(&self) -> &'static str {
-        match self {
-            Volume::Mass => "mass",
-            Volume::Generalised => "ve",
-            Volume::PressureEnergy => "pressure-energy",
-        }
-    }
-}
-
-impl AvForm {
-    /// The name on the command line and in `config.toml` (`--av-form`).
-    pub fn name(&self) -> &'static str {
-        match self {
-            AvForm::Paper => "paper",
-            AvForm::SphExa => "sph-exa",
-        }
-    }
 }
 
 /// Everything that defines the discretisation of the hydrodynamics.
