@@ -1,0 +1,72 @@
+//! The configuration of a hydro run.
+
+use crate::eos::Eos;
+use crate::integrate::HUpdate;
+use crate::neighbors::NeighborParams;
+use crate::scheme::Scheme;
+use crate::timestep::TimestepParams;
+use crate::{CoreError, FieldSet};
+use sph_gravity::GravityParams;
+use sph_tree::Curve;
+
+/// Everything a run of the hydrodynamics needs besides the particles and
+/// the kernel: the scheme (discretisation), the physics (EOS, gravity)
+/// and the numerical controls.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HydroConfig {
+    /// The discretisation: gradients, grad-h, viscosity, conductivity.
+    pub scheme: Scheme,
+    /// Equation of state.
+    pub eos: Eos,
+    /// Neighbour-count targets.
+    pub neighbors: NeighborParams,
+    /// Smoothing-length update rule.
+    pub h_update: HUpdate,
+    /// Time-step criteria.
+    pub timestep: TimestepParams,
+    /// Space-filling curve for sorting.
+    pub curve: Curve,
+    /// Octree bucket size.
+    pub bucket: usize,
+    /// Self-gravity (tree multipoles; open boxes only), or none.
+    pub gravity: Option<GravityParams>,
+}
+
+impl Default for HydroConfig {
+    fn default() -> Self {
+        Self {
+            scheme: Scheme::PAPER,
+            eos: Eos::IdealGas { gamma: 5.0 / 3.0 },
+            neighbors: NeighborParams::default(),
+            h_update: HUpdate::default(),
+            timestep: TimestepParams::default(),
+            curve: Curve::Hilbert,
+            bucket: 16,
+            gravity: None,
+        }
+    }
+}
+
+impl HydroConfig {
+    /// Checks the scheme, the EOS and the numerical controls.
+    ///
+    /// # Errors
+    /// [`CoreError::Invalid`] naming the bad value and what is allowed.
+    pub fn validate(&self) -> Result<(), CoreError> {
+        self.scheme.validate()?;
+        self.eos.validate()?;
+        if self.bucket == 0 {
+            return Err(CoreError::Invalid("bucket size must be at least 1".into()));
+        }
+        Ok(())
+    }
+
+    /// The optional per-particle fields a run with this configuration
+    /// needs.
+    pub fn fields(&self) -> FieldSet {
+        FieldSet {
+            eos_ref: self.eos.needs_reference(),
+            ..self.scheme.fields(self.gravity.is_some())
+        }
+    }
+}

@@ -1,0 +1,501 @@
+//! The stages of a step, in pipeline order.
+
+use super::report::{Stage, StageClock};
+use super::Hydro;
+use crate::av_switch::{
+    balsara, iad_and_velocity_divergence, update_alpha, velocity_divergence, FlowState,
+};
+use crate::conduction::Conductivity;
+use crate::density::{density, pressure_energy_density, ve_density, xmass, Positions, VeOut};
+use crate::iad::iad_volumes;
+use crate::integrate::HUpdate;
+use crate::momentum::{
+    momentum_energy_with, Alpha, ArtificialStress, AvCleaning, HydroState, MomentumScheme,
+    MomentumStats, Rates, VolumeWeights,
+};
+use crate::neighbors::find_neighbors;
+use crate::scheme::{Viscosity, Volume};
+use crate::{CoreError, Particles};
+use rayon::prelude::*;
+use sph_comm::Communicator;
+use sph_gravity::{Decomposition, GravityStats};
+use sph_kernels::Kernel;
+use sph_tree::{BoundingBox, CompactNeighborList, NeighborStats};
+use std::ops::Range;
+
+impl<K: Kernel, C: Communicator> Hydro<K, C> {
+    /// The IAD matrices of the owned particles, with volumes `m / rho` or
+    /// the volume elements `X / k`.
+    ///
+    /// With `divergence` the velocity divergence (and the curl, for the
+    /// Balsara limiter) of the owned particles is computed in the same pass.
+    pub(super) fn iad(
+        &mut self,
+        p: &mut Particles,
+        bbox: &BoundingBox,
+        step: u64,
+        divergence: bool,
+    ) -> Result<(), CoreError> {
+        if divergence {
+            self.size_gradient(p.len());
+        }
+        let pos = positions!(p);
+        let volumes = match self.config.scheme.volume {
+            Volume::Mass => [&p.m[..], &p.rho[..]],
+            Volume::Generalised | Volume::PressureEnergy => [&self.buf.xm[..], &self.buf.kx[..]],
+        };
+        let result = if divergence {
+            let n = p.len();
+            self.buf.div_v.resize(n, 0.0);
+            if self.config.scheme.balsara {
+                self.buf.curl_v.resize(n, 0.0);
+            }
+            let flow = FlowState {
+                pos,
+                vx: &p.vx,
+                vy: &p.vy,
+                vz: &p.vz,
+                rho: &p.rho,
+                c: &p.c,
+                iad: [&[]; 6],
+            };
+            iad_and_velocity_divergence(
+                &self.kernel,
+                bbox,
+                flow,
+                volumes,
+                &self.list,
+                &mut p.iad,
+                &mut self.buf.div_v,
+                &mut self.buf.curl_v,
+                &mut self.buf.grad_v,
+            )
+        } else {
+            iad_volumes(&self.kernel, bbox, pos, volumes, &self.list, &mut p.iad)
+        };
+        result.map_err(|s| CoreError::SingularIad {
+            step,
+            id: p.id[s.index],
+            det: s.det,
+            neighbors: self.list.count(s.index),
+        })
+    }
+
+    /// The viscosity switches and the Balsara limiter: velocity divergence
+    /// (and curl, for the limiter), exchanged to the halos when the
+    /// switches need it, then alpha advanced over the time since its last
+    /// update (none before step 1); the strengths the momentum stage reads
+    /// (`alpha`, or `alpha_eff` with the limiter) are exchanged too.
+    pub(super) fn switches(
+        &mut self,
+        p: &mut Particles,
+        bbox: &BoundingBox,
+        step: u64,
+        clock: &mut StageClock,
+        divergence_done: bool,
+    ) -> Result<(), CoreError> {
+        let scheme = self.config.scheme;
+        let n = p.len();
+        let g = scheme.gradients;
+        if !divergence_done {
+            self.size_gradient(n);
+        }
+        let (kernel, list) = (&self.kernel, &self.list);
+        if !divergence_done {
+            self.buf.div_v.resize(n, 0.0);
+            if scheme.balsara {
+                self.buf.curl_v.resize(n, 0.0);
+            }
+            let flow = FlowState::from(hydro_state!(p));
+            velocity_divergence(
+                kernel,
+                bbox,
+                flow,
+                g,
+                list,
+                &mut self.buf.div_v,
+                &mut self.buf.curl_v,
+                &mut self.buf.grad_v,
+            );
+            clock.lap(Stage::Switches);
+        }
+        if let Some(sw) = scheme.switches() {
+            self.domain.exchange(&mut [self.buf.div_v.as_mut_slice()])?;
+            clock.lap(Stage::Halos);
+            let elapsed = if step == 1 { 0.0 } else { self.dt_prev };
+            let flow = FlowState::from(hydro_state!(p));
+            update_alpha(
+                kernel,
+                bbox,
+                flow,
+                g,
+                &self.buf.div_v,
+                &sw,
+                elapsed,
+                list,
+                &mut p.alpha,
+            );
+            clock.lap(Stage::Switches);
+        }
+        if scheme.balsara {
+            self.buf.alpha_eff.resize(n, 0.0);
+            let constant = scheme.alpha();
+            let switched = scheme.switches().is_some();
+            for i in list.targets() {
+                let base = if switched { p.alpha[i] } else { constant };
+                let f = balsara(self.buf.div_v[i], self.buf.curl_v[i], p.c[i], p.h[i]);
+                self.buf.alpha_eff[i] = base * f;
+            }
+            clock.lap(Stage::Switches);
+            self.domain
+                .exchange(&mut [self.buf.alpha_eff.as_mut_slice()])?;
+        } else if scheme.switches().is_some() {
+            self.domain.exchange(&mut [p.alpha.as_mut_slice()])?;
+        }
+        if scheme.av_cleaning {
+            let mut fields: Vec<&mut [f64]> =
+                self.buf.grad_v.iter_mut().map(Vec::as_mut_slice).collect();
+            self.domain.exchange(&mut fields)?;
+        }
+        clock.lap(Stage::Halos);
+        Ok(())
+    }
+
+    /// Sizes the six symmetric-gradient fields to `n` particles when the
+    /// scheme cleans the viscosity (none otherwise).
+    pub(super) fn size_gradient(&mut self, n: usize) {
+        if self.config.scheme.av_cleaning {
+            self.buf.grad_v.resize_with(6, Vec::new);
+            for v in &mut self.buf.grad_v {
+                v.resize(n, 0.0);
+            }
+        }
+    }
+
+    /// Accelerations and du/dt of the owned particles, with the scheme's
+    /// viscosity and volumes.
+    pub(super) fn momentum(&self, p: &mut Particles, bbox: &BoundingBox) -> MomentumStats {
+        let state = hydro_state!(p);
+        let rates = Rates {
+            ax: &mut p.ax,
+            ay: &mut p.ay,
+            az: &mut p.az,
+            du: &mut p.du,
+        };
+        let s = self.config.scheme;
+        let alpha = if s.balsara {
+            Alpha::PerParticle(&self.buf.alpha_eff)
+        } else {
+            match s.viscosity {
+                Viscosity::Constant { alpha } => Alpha::Constant(alpha),
+                Viscosity::Switched(_) => Alpha::PerParticle(&p.alpha),
+            }
+        };
+        let scheme = MomentumScheme {
+            gradients: s.gradients,
+            alpha,
+            av_form: s.av_form,
+            volumes: VolumeWeights::of(s.volume, &self.buf.xm),
+            cleaning: s.av_cleaning.then(|| AvCleaning {
+                grad_v: std::array::from_fn(|k| self.buf.grad_v[k].as_slice()),
+                eta_crit: AvCleaning::eta_crit(self.config.neighbors.ng0),
+            }),
+            stress: s
+                .artificial_stress
+                .map(|e| ArtificialStress::new(e, self.config.neighbors.ng0, &self.kernel)),
+            conduction: s.conductivity.map(|alpha_u| Conductivity {
+                alpha_u,
+                p: &p.p,
+                u: &p.u,
+            }),
+        };
+        let (k, f, list) = (&self.kernel, &self.buf.factors, &self.list);
+        momentum_energy_with(k, bbox, state, f, scheme, list, rates)
+    }
+
+    /// Adds self-gravity to the owned particles' accelerations (when the
+    /// run has it) and returns their largest |a| (0 without gravity: the
+    /// acceleration criterion is off).
+    pub(super) fn add_gravity(
+        &mut self,
+        p: &mut Particles,
+        bbox: &BoundingBox,
+        owned: Range<usize>,
+        step: u64,
+    ) -> Result<f64, CoreError> {
+        if self.gravity.is_none() {
+            return Ok(0.0);
+        }
+        self.gravity_field(p, bbox, owned.clone(), step)?;
+        let f = &self.field;
+        for (k, i) in owned.clone().enumerate() {
+            p.ax[i] += f.ax[k];
+            p.ay[i] += f.ay[k];
+            p.az[i] += f.az[k];
+        }
+        Ok(owned
+            .map(|i| (p.ax[i] * p.ax[i] + p.ay[i] * p.ay[i] + p.az[i] * p.az[i]).sqrt())
+            .fold(0.0, f64::max))
+    }
+
+    /// Over the owned particles: `[max_k |v_n,k|, max_k |a_k|, max h_next,
+    /// max -du/dt / u]` with `v_n = dX / dt_prev + a dt_prev / 2` (the
+    /// Press velocity the integrator will use), `h_next = h * factor(nc)`
+    /// (its h update) and the cooling rate over particles with `u > 0` and
+    /// falling (0 unless `energy`: the pressure depends on `u`).
+    pub(super) fn motion_bounds(
+        &self,
+        p: &Particles,
+        bbox: &BoundingBox,
+        owned: Range<usize>,
+        hu: HUpdate,
+        energy: bool,
+    ) -> [f64; 4] {
+        let any_open = (0..3).any(|k| !bbox.is_periodic(k));
+        let half = 0.5 * self.dt_prev;
+        let inv = 1.0 / self.dt_prev;
+        owned
+            .into_par_iter()
+            .map(|i| {
+                let h_next = p.h[i] * hu.factor(p.nc[i]);
+                // (Read only with `energy`: the fields may be empty.)
+                let cooling = if energy && p.u[i] > 0.0 && p.du[i] < 0.0 {
+                    -p.du[i] / p.u[i]
+                } else {
+                    0.0
+                };
+                if !any_open {
+                    return [0.0, 0.0, h_next, cooling];
+                }
+                let a = [p.ax[i].abs(), p.ay[i].abs(), p.az[i].abs()];
+                let d = [p.dx[i].abs(), p.dy[i].abs(), p.dz[i].abs()];
+                let v = (0..3).map(|k| d[k] * inv + a[k] * half).fold(0.0, f64::max);
+                [v, a[0].max(a[1]).max(a[2]), h_next, cooling]
+            })
+            .reduce(|| [0.0; 4], |x, y| std::array::from_fn(|k| x[k].max(y[k])))
+    }
+
+    /// Evaluates the self-gravity of all particles on the owned ones (into
+    /// the gravity field buffer) and stores their potential in `phi`.
+    pub(super) fn gravity_field(
+        &mut self,
+        p: &mut Particles,
+        bbox: &BoundingBox,
+        owned: Range<usize>,
+        step: u64,
+    ) -> Result<GravityStats, CoreError> {
+        let Some(solver) = self.gravity.as_mut() else {
+            return Ok(GravityStats::default());
+        };
+        if p.phi.len() != p.len() {
+            return Err(CoreError::Invalid(
+                "self-gravity needs the potential field: build the particles with FieldSet { gravity: true, .. }".into(),
+            ));
+        }
+        // The gravity tree holds the owned particles only (halos are
+        // copies); on one rank that is the neighbour tree itself.
+        let r = owned.clone();
+        let tree = if owned.len() == p.len() {
+            &self.tree
+        } else {
+            self.gravity_tree.rebuild(
+                &self.domain.keys()[r.clone()],
+                &p.x[r.clone()],
+                &p.y[r.clone()],
+                &p.z[r.clone()],
+                self.config.bucket,
+            )?;
+            &self.gravity_tree
+        };
+        let dec = Decomposition {
+            bbox,
+            curve: self.config.curve,
+            key_start: self.domain.key_ranges(),
+            h_max: self.domain.h_limit(),
+        };
+        let stats = solver
+            .compute(
+                self.domain.comm(),
+                dec,
+                tree,
+                &p.x[r.clone()],
+                &p.y[r.clone()],
+                &p.z[r.clone()],
+                &p.m[r.clone()],
+                Some(&p.h[r.clone()]),
+                &mut self.field,
+            )
+            .map_err(|source| CoreError::Gravity { step, source })?;
+        p.phi[owned].copy_from_slice(&self.field.phi);
+        Ok(stats)
+    }
+
+    /// Neighbour lists of the owned particles, with the h iteration. Counts
+    /// are one-sided (`r < 2 h_i`), so each particle's iteration is its own
+    /// business; the lists are symmetric (`r < 2 max(h_i, h_j)`), so once
+    /// the halos' final h are known the lists are rebuilt if any changed.
+    pub(super) fn search(
+        &mut self,
+        p: &mut Particles,
+        bbox: &BoundingBox,
+        step: u64,
+        owned: Range<usize>,
+    ) -> Result<NeighborStats, CoreError> {
+        let h_limit = self.domain.h_limit();
+        let params = if self.config.scheme.fixed_h {
+            self.config.neighbors.without_iteration()
+        } else {
+            self.config.neighbors
+        };
+        let run = |p: &mut Particles, list: &mut CompactNeighborList| {
+            find_neighbors(
+                &params,
+                self.config.h_update,
+                &self.tree,
+                bbox,
+                &p.x,
+                &p.y,
+                &p.z,
+                &mut p.h,
+                &p.id,
+                owned.clone(),
+                h_limit,
+                list,
+                &mut p.nc,
+                step,
+            )
+        };
+        let stats = run(p, &mut self.list)?;
+        if self.domain.comm().size() == 1 {
+            return Ok(stats);
+        }
+        // Only halos change in the exchange: keep their h alone.
+        let halos = |h: &[f64]| {
+            let (low, rest) = h.split_at(owned.start);
+            low.iter()
+                .chain(&rest[owned.len()..])
+                .map(|v| v.to_bits())
+                .collect::<Vec<u64>>()
+        };
+        let before = halos(&p.h);
+        self.domain.exchange(&mut [p.h.as_mut_slice()])?;
+        let changed = before != halos(&p.h);
+        // Every rank's lists must see every particle's final h.
+        if changed {
+            return run(p, &mut self.list);
+        }
+        Ok(stats)
+    }
+
+    /// Density and grad-h factor of the owned particles; with generalised
+    /// volumes, `X` (exchanged to the halos), then `k`, the density
+    /// `k m / X` and the grad-h factor.
+    pub(super) fn density(
+        &mut self,
+        p: &mut Particles,
+        bbox: &BoundingBox,
+    ) -> Result<(), CoreError> {
+        let pos = positions!(p);
+        if self.config.scheme.volume == Volume::Mass {
+            density(
+                &self.kernel,
+                bbox,
+                pos,
+                &self.list,
+                &mut p.rho,
+                &mut p.omega,
+            );
+            return Ok(());
+        }
+        let n = p.len();
+        self.buf.xm.resize(n, 0.0);
+        self.buf.kx.resize(n, 0.0);
+        if self.config.scheme.volume == Volume::PressureEnergy {
+            // X = m u, halos included (their u came with them).
+            for ((x, m), u) in self.buf.xm.iter_mut().zip(&p.m).zip(&p.u) {
+                *x = m * u;
+            }
+            if let Some(i) = self
+                .buf
+                .xm
+                .iter()
+                .position(|&x| !(x > 0.0 && x.is_finite()))
+            {
+                return Err(CoreError::Invalid(format!(
+                    "pressure-energy volumes need m u > 0: particle {} has m = {}, u = {} (use --volume mass or ve for cold gas)",
+                    p.id[i], p.m[i], p.u[i]
+                )));
+            }
+        } else {
+            xmass(&self.kernel, bbox, pos, &self.list, &mut self.buf.xm);
+            self.domain.exchange(&mut [self.buf.xm.as_mut_slice()])?;
+        }
+        let out = VeOut {
+            kx: &mut self.buf.kx,
+            rho: &mut p.rho,
+            omega: &mut p.omega,
+        };
+        if self.config.scheme.volume == Volume::PressureEnergy {
+            pressure_energy_density(
+                &self.kernel,
+                bbox,
+                positions!(p),
+                &self.buf.xm,
+                &self.list,
+                out,
+            );
+        } else {
+            ve_density(
+                &self.kernel,
+                bbox,
+                positions!(p),
+                &self.buf.xm,
+                &self.list,
+                out,
+            );
+        }
+        Ok(())
+    }
+
+    /// Sends the owners' density, pressure, sound speed (and Omega) to the
+    /// halos.
+    pub(super) fn exchange_thermo(&mut self, p: &mut Particles) -> Result<(), CoreError> {
+        let mut fields: Vec<&mut [f64]> = vec![&mut p.rho, &mut p.p, &mut p.c];
+        if !p.omega.is_empty() {
+            fields.push(&mut p.omega);
+        }
+        if self.config.scheme.volume != Volume::Mass {
+            fields.push(&mut self.buf.kx);
+        }
+        self.domain.exchange(&mut fields)?;
+        Ok(())
+    }
+
+    /// Pressure and sound speed of the owned particles; an EOS with a
+    /// per-particle reference state calibrates reference densities left at
+    /// zero to the current density.
+    pub(super) fn eos(&self, p: &mut Particles, owned: Range<usize>) -> Result<(), CoreError> {
+        let r = owned;
+        let reference = if self.config.eos.needs_reference() {
+            // The field table's check at the start of `step` and
+            // `evaluate_density` (HydroConfig::fields holds eos_ref) made
+            // sure the reference state is there.
+            for i in r.clone() {
+                if p.eos_ref[0][i] == 0.0 {
+                    p.eos_ref[0][i] = p.rho[i];
+                }
+            }
+            Some((&p.eos_ref[0][r.clone()], &p.eos_ref[1][r.clone()]))
+        } else {
+            None
+        };
+        self.config.eos.apply(
+            &p.rho[r.clone()],
+            &p.u[r.clone()],
+            reference,
+            &mut p.p[r.clone()],
+            &mut p.c[r],
+        );
+        Ok(())
+    }
+}
