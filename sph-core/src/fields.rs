@@ -7,7 +7,7 @@
 //! holds it. Storage, migration and halo packing, reordering, bytes per
 //! particle, the length check, and the checkpoint and snapshot field lists
 //! are all derived from [`FIELDS`]: declaring a new persistent field is one
-//! entry here and one `Vec` in `Particles`.
+//! `Vec` in [`Particles`] and one entry in the table, both in this file.
 //!
 //! ```
 //! use sph_core::fields::{self, Kind, Needs};
@@ -25,8 +25,6 @@
 //! assert!(matches!(rho.kind, Kind::Derived { .. }) && rho.needs == Needs::Always);
 //! assert_eq!(rho.f64(&p).unwrap().len(), 3);
 //! ```
-
-use crate::Particles;
 
 /// What a field is, which decides where it travels.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -220,6 +218,74 @@ use Kind::{History, Identity, Persistent};
 use Needs::{Always, GradH, Gravity, Iad, ReferencedEos, Switches};
 
 const DERIVED: Kind = Kind::Derived { fill: 0.0 };
+
+/// All particles of one rank, one array per field: the storage of the
+/// table below ([`FIELDS`]), whose entries reach these arrays; its
+/// operations are in `particles.rs`.
+#[derive(Debug, Clone, Default)]
+pub struct Particles {
+    /// Unique particle id (stable across sorting and ranks).
+    pub id: Vec<u64>,
+    /// Position.
+    pub x: Vec<f64>,
+    /// Position.
+    pub y: Vec<f64>,
+    /// Position.
+    pub z: Vec<f64>,
+    /// Velocity.
+    pub vx: Vec<f64>,
+    /// Velocity.
+    pub vy: Vec<f64>,
+    /// Velocity.
+    pub vz: Vec<f64>,
+    /// Position change of the last step, `x_n - x_{n-1}` (Press integrator).
+    pub dx: Vec<f64>,
+    /// Position change of the last step.
+    pub dy: Vec<f64>,
+    /// Position change of the last step.
+    pub dz: Vec<f64>,
+    /// Smoothing length.
+    pub h: Vec<f64>,
+    /// Mass.
+    pub m: Vec<f64>,
+    /// Specific internal energy.
+    pub u: Vec<f64>,
+    /// Density.
+    pub rho: Vec<f64>,
+    /// Pressure.
+    pub p: Vec<f64>,
+    /// Sound speed.
+    pub c: Vec<f64>,
+    /// grad-h factor Omega (empty when grad-h is off).
+    pub omega: Vec<f64>,
+    /// Inverse IAD matrix, components xx, xy, xz, yy, yz, zz (empty for
+    /// plain kernel gradients).
+    pub iad: [Vec<f64>; 6],
+    /// Acceleration.
+    pub ax: Vec<f64>,
+    /// Acceleration.
+    pub ay: Vec<f64>,
+    /// Acceleration.
+    pub az: Vec<f64>,
+    /// du/dt of this step.
+    pub du: Vec<f64>,
+    /// du/dt of the previous step (Adams-Bashforth).
+    pub du_prev: Vec<f64>,
+    /// Gravitational potential per unit mass (empty without self-gravity).
+    pub phi: Vec<f64>,
+    /// Per-particle artificial-viscosity strength (empty unless AV switches
+    /// are on: [`FieldSet::alpha`]).
+    pub alpha: Vec<f64>,
+    /// Per-particle reference density and pressure of
+    /// [`Eos::TaitReferenced`](crate::Eos) (empty otherwise); a zero
+    /// density is calibrated from the first density evaluation.
+    pub eos_ref: [Vec<f64>; 2],
+    /// Neighbour count of the last search (self included), for the h update.
+    pub nc: Vec<u32>,
+    /// The optional fields held (on every rank alike, even one that holds
+    /// no particles right now, so that messages agree).
+    pub(crate) fields: FieldSet,
+}
 
 /// Every per-particle field, in the order of snapshot listings; migration
 /// and halo messages pack the sent fields in this order too, checkpoints

@@ -1,85 +1,20 @@
-//! Particle storage: structure of arrays, `f64`, one `Vec` per field.
+//! The operations on the particle storage ([`Particles`]: structure of
+//! arrays, one `Vec` per field).
 //!
 //! What each array is, and so what migration, halos, reordering and
-//! checkpoints do with it, is declared once in the [field
-//! table](crate::fields); the operations here loop over that table.
+//! checkpoints do with it, is declared once, beside the struct, in the
+//! [field table](crate::fields); the operations here loop over that table.
 //!
 //! Only the fields the chosen physics needs hold data: the IAD matrix is
 //! empty when plain kernel gradients are used, and the grad-h factor is
 //! empty when grad-h terms are off. Arrays are kept in space-filling-curve
 //! order by [`Particles::reorder`].
 
-pub use crate::fields::FieldSet;
 use crate::fields::{self, Column, Kind, FIELDS};
+pub use crate::fields::{FieldSet, Particles};
 use sph_domain::ParticleFields;
 use sph_tree::{apply_permutation, apply_permutation_f64};
 use std::ops::Range;
-
-/// All particles of one rank, one array per field.
-#[derive(Debug, Clone, Default)]
-pub struct Particles {
-    /// Unique particle id (stable across sorting and ranks).
-    pub id: Vec<u64>,
-    /// Position.
-    pub x: Vec<f64>,
-    /// Position.
-    pub y: Vec<f64>,
-    /// Position.
-    pub z: Vec<f64>,
-    /// Velocity.
-    pub vx: Vec<f64>,
-    /// Velocity.
-    pub vy: Vec<f64>,
-    /// Velocity.
-    pub vz: Vec<f64>,
-    /// Position change of the last step, `x_n - x_{n-1}` (Press integrator).
-    pub dx: Vec<f64>,
-    /// Position change of the last step.
-    pub dy: Vec<f64>,
-    /// Position change of the last step.
-    pub dz: Vec<f64>,
-    /// Smoothing length.
-    pub h: Vec<f64>,
-    /// Mass.
-    pub m: Vec<f64>,
-    /// Specific internal energy.
-    pub u: Vec<f64>,
-    /// Density.
-    pub rho: Vec<f64>,
-    /// Pressure.
-    pub p: Vec<f64>,
-    /// Sound speed.
-    pub c: Vec<f64>,
-    /// grad-h factor Omega (empty when grad-h is off).
-    pub omega: Vec<f64>,
-    /// Inverse IAD matrix, components xx, xy, xz, yy, yz, zz (empty for
-    /// plain kernel gradients).
-    pub iad: [Vec<f64>; 6],
-    /// Acceleration.
-    pub ax: Vec<f64>,
-    /// Acceleration.
-    pub ay: Vec<f64>,
-    /// Acceleration.
-    pub az: Vec<f64>,
-    /// du/dt of this step.
-    pub du: Vec<f64>,
-    /// du/dt of the previous step (Adams-Bashforth).
-    pub du_prev: Vec<f64>,
-    /// Gravitational potential per unit mass (empty without self-gravity).
-    pub phi: Vec<f64>,
-    /// Per-particle artificial-viscosity strength (empty unless AV switches
-    /// are on: [`FieldSet::alpha`]).
-    pub alpha: Vec<f64>,
-    /// Per-particle reference density and pressure of
-    /// [`Eos::TaitReferenced`](crate::Eos) (empty otherwise); a zero
-    /// density is calibrated from the first density evaluation.
-    pub eos_ref: [Vec<f64>; 2],
-    /// Neighbour count of the last search (self included), for the h update.
-    pub nc: Vec<u32>,
-    /// The optional fields held (on every rank alike, even one that holds
-    /// no particles right now, so that messages agree).
-    fields: FieldSet,
-}
 
 impl Particles {
     /// `n` particles at rest at the origin, with the fields of `fields`
