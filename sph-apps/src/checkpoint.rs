@@ -285,10 +285,8 @@ pub fn load<C: Communicator>(comm: &C, spec: &str) -> Result<Loaded, AppError> {
 /// A checkpoint field missing from `rows` or of the wrong type, named.
 pub fn particles(rows: &Snapshot, fields: FieldSet, path: &Path) -> Result<Particles, AppError> {
     let n = rows.len();
-    let fields = FieldSet {
-        eos_ref: fields.eos_ref || rows.field("rho0").is_some(),
-        ..fields
-    };
+    let mut fields = fields;
+    fields.eos_ref |= rows.field("rho0").is_some();
     let mut p = Particles::new(n, fields);
     let missing = |name: &str| {
         AppError::Usage(format!(

@@ -232,11 +232,9 @@ pub fn relax(
     config.neighbors.ngmax = spec.ngmax;
     // Kernel gradients: the cheapest operator; the gas is at rest, so the
     // viscosity has nothing to do.
-    let scheme = Scheme {
-        gradients: Gradients::Kernel,
-        grad_h: false,
-        ..Scheme::PAPER
-    };
+    let mut scheme = Scheme::PAPER;
+    scheme.gradients = Gradients::Kernel;
+    scheme.grad_h = false;
     SchemeOverrides::default().apply(scheme, Physics::IDEAL_GAS, &mut config);
     let (mut p, _) = Share::WHOLE.particles(n, config.fields());
     let mut rng = SplitMix64(0x5EED ^ n as u64);

@@ -66,8 +66,10 @@ pub enum Needs {
 }
 
 /// Which optional fields a run holds (one flag per [`Needs`] condition
-/// other than [`Needs::Always`]).
+/// other than [`Needs::Always`]). It grows with the table: build one from
+/// `Default` (or [`Scheme::fields`](crate::Scheme::fields)) and set flags.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub struct FieldSet {
     /// The 6 components of the inverse IAD matrix.
     pub iad: bool,
@@ -79,6 +81,17 @@ pub struct FieldSet {
     pub alpha: bool,
     /// The reference density and pressure of a referenced EOS.
     pub eos_ref: bool,
+}
+
+impl FieldSet {
+    /// No optional field: plain kernel gradients, no grad-h, nothing else.
+    pub const NONE: FieldSet = FieldSet {
+        iad: false,
+        grad_h: false,
+        gravity: false,
+        alpha: false,
+        eos_ref: false,
+    };
 }
 
 impl Default for FieldSet {

@@ -46,7 +46,11 @@ pub enum Viscosity {
 }
 
 /// Everything that defines the discretisation of the hydrodynamics.
+///
+/// It will grow with new options: build one from a preset ([`Scheme::preset`],
+/// [`PRESETS`], the constants such as [`Scheme::PAPER`]) and set fields.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct Scheme {
     /// Gradient operator (IAD or plain kernel gradients).
     pub gradients: Gradients,

@@ -5,6 +5,7 @@ use crate::momentum::MomentumStats;
 /// Time-step criteria (`docs/physics.md`): Courant, density change, acceleration,
 /// falling internal energy, growth limit.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct TimestepParams {
     /// Courant factor on `h / v_sig`.
     pub k_courant: f64,

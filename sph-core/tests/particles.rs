@@ -9,7 +9,7 @@ proptest! {
     /// not double the arrays as repeated pushes would.
     #[test]
     fn reserve_keeps_values_and_grows_to_need(n in 1usize..300, extra in 0usize..600) {
-        let mut p = Particles::new(n, FieldSet { grad_h: true, iad: true, ..FieldSet::default() });
+        let mut p = Particles::new(n, FieldSet::default());
         for i in 0..n {
             p.x[i] = i as f64;
             p.id[i] = 7 * i as u64;
@@ -43,7 +43,7 @@ proptest! {
     /// in fewer words, with and without the optional persistent fields.
     #[test]
     fn halos_travel_without_the_integrator_history(seed in any::<u64>(), switches in any::<bool>()) {
-        let fields = FieldSet { grad_h: true, iad: true, ..FieldSet::default() };
+        let fields = FieldSet::default();
         let mut p = Particles::new(1, fields);
         if switches {
             p.enable_alpha(0.0);
@@ -94,7 +94,8 @@ proptest! {
     ) {
         let nh = keys.len();
         let n = n_owned + nh;
-        let fields = FieldSet { grad_h: true, iad: true, gravity, ..FieldSet::default() };
+        let mut fields = FieldSet::default();
+        fields.gravity = gravity;
         let mut p = Particles::new(n, fields);
         for i in 0..n {
             p.id[i] = 1000 + i as u64;
@@ -131,7 +132,8 @@ proptest! {
         switches in any::<bool>(),
         gravity in any::<bool>(),
     ) {
-        let fields = FieldSet { grad_h: true, iad: true, gravity, ..FieldSet::default() };
+        let mut fields = FieldSet::default();
+        fields.gravity = gravity;
         let mut src = Particles::new(n, fields);
         if switches {
             src.enable_alpha(0.5);

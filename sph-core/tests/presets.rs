@@ -12,10 +12,7 @@ use sph_tree::{Boundary, BoundingBox};
 /// and the largest momentum and relative energy drifts.
 fn blast(scheme: Scheme, steps: usize) -> (Particles, f64, f64) {
     let n = 12;
-    let config = HydroConfig {
-        scheme,
-        ..Default::default()
-    };
+    let config = HydroConfig::with_scheme(scheme);
     let mut p = Particles::new(n * n * n, config.fields());
     for i in 0..p.len() {
         let c = [i % n, i / n % n, i / (n * n)].map(|k| (k as f64 + 0.5) / n as f64 - 0.5);
@@ -44,10 +41,15 @@ fn blast(scheme: Scheme, steps: usize) -> (Particles, f64, f64) {
     (p, mom, de)
 }
 
+fn with_balsara(mut s: Scheme) -> Scheme {
+    s.balsara = true;
+    s
+}
+
 fn schemes() -> Vec<(String, Scheme)> {
     let mut v: Vec<(String, Scheme)> = PRESETS.iter().map(|p| (p.0.to_string(), p.1)).collect();
     for (name, s) in [("paper", Scheme::PAPER), ("ve", Scheme::VE)] {
-        v.push((format!("{name}+balsara"), Scheme { balsara: true, ..s }));
+        v.push((format!("{name}+balsara"), with_balsara(s)));
     }
     v
 }
@@ -83,13 +85,7 @@ fn every_preset_conserves_momentum_and_energy_and_ignores_threads() {
 #[test]
 fn balsara_changes_the_solution_and_ve_differs_from_paper() {
     let (plain, _, _) = blast(Scheme::PAPER, 6);
-    let (limited, _, _) = blast(
-        Scheme {
-            balsara: true,
-            ..Scheme::PAPER
-        },
-        6,
-    );
+    let (limited, _, _) = blast(with_balsara(Scheme::PAPER), 6);
     assert_ne!(plain.u, limited.u);
     let (ve, _, _) = blast(Scheme::VE, 6);
     assert_ne!(plain.rho, ve.rho);

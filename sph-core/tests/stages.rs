@@ -532,14 +532,7 @@ fn viscosity_is_dissipative() {
 fn integrator_is_time_reversible() {
     let n = 50;
     let mut rng = Rng(5);
-    let mut p = Particles::new(
-        n,
-        FieldSet {
-            iad: false,
-            grad_h: false,
-            ..FieldSet::default()
-        },
-    );
+    let mut p = Particles::new(n, FieldSet::NONE);
     let bbox = BoundingBox::cube(-10.0, 10.0, Boundary::Open).unwrap();
     for i in 0..n {
         p.x[i] = rng.uniform() - 0.5;

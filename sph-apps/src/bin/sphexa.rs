@@ -1559,18 +1559,16 @@ fn run(a: RunArgs) -> Result<(), AppError> {
     let kernel_choice = a.kernel;
     let kernel: FastKernel = kernel_choice.fast()?;
 
-    let mut config = HydroConfig {
-        curve: match a.curve {
-            CurveArg::Hilbert => Curve::Hilbert,
-            CurveArg::Morton => Curve::Morton,
-        },
-        // Kept only by cases with self-gravity.
-        gravity: Some(sph_gravity::GravityParams {
-            theta: a.theta,
-            ..Default::default()
-        }),
-        ..HydroConfig::default()
+    let mut config = HydroConfig::default();
+    config.curve = match a.curve {
+        CurveArg::Hilbert => Curve::Hilbert,
+        CurveArg::Morton => Curve::Morton,
     };
+    // Kept only by cases with self-gravity.
+    config.gravity = Some(sph_gravity::GravityParams {
+        theta: a.theta,
+        ..Default::default()
+    });
     config.neighbors.ng0 = a.ng0;
     config.neighbors.ngmax = a.ngmax;
     let stop = match (a.steps, a.end_time) {

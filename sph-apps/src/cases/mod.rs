@@ -542,16 +542,12 @@ mod tests {
             assert!(case.default_end_time() > 0.0, "{}", case.name());
             assert!(!case.description().is_empty(), "{}", case.name());
             // Whatever scheme the caller's config had, the case's wins.
-            let wrong = HydroConfig {
-                scheme: Scheme {
-                    gradients: sph_core::Gradients::Kernel,
-                    grad_h: false,
-                    viscosity: sph_core::Viscosity::Constant { alpha: 3.0 },
-                    conductivity: Some(1.0),
-                    ..Scheme::PAPER
-                },
-                ..Default::default()
-            };
+            let mut scheme = Scheme::PAPER;
+            scheme.gradients = sph_core::Gradients::Kernel;
+            scheme.grad_h = false;
+            scheme.viscosity = sph_core::Viscosity::Constant { alpha: 3.0 };
+            scheme.conductivity = Some(1.0);
+            let wrong = HydroConfig::with_scheme(scheme);
             // 8 per side, 32 for wind-shock (its 0.25-wide box needs 28).
             let side = if case.name() == "wind-shock" { 32 } else { 8 };
             let layout = Layout::Glass {

@@ -144,13 +144,11 @@ mod tests {
 
     #[test]
     fn gravity_keeps_the_callers_parameters_with_the_cases_softening() {
-        let mut config = HydroConfig {
-            gravity: Some(GravityParams {
-                theta: 0.7,
-                ..Default::default()
-            }),
+        let mut config = HydroConfig::default();
+        config.gravity = Some(GravityParams {
+            theta: 0.7,
             ..Default::default()
-        };
+        });
         let gravity = Physics {
             softening: Some(0.25),
             ..Physics::IDEAL_GAS

@@ -84,10 +84,9 @@ impl Case for SodTube {
 
     /// The paper's scheme with kernel gradients (see the module docs).
     fn default_scheme(&self) -> Scheme {
-        Scheme {
-            gradients: sph_core::Gradients::Kernel,
-            ..Scheme::PAPER
-        }
+        let mut s = Scheme::PAPER;
+        s.gradients = sph_core::Gradients::Kernel;
+        s
     }
 
     /// `side` dense particles along x, `cross^2` across

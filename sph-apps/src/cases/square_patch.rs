@@ -107,13 +107,12 @@ impl Case for SquarePatch {
     ///   and a cavity at the centre by t = 0.5 s without the stress, 0.73
     ///   with it.
     fn default_scheme(&self) -> Scheme {
-        Scheme {
-            gradients: sph_core::Gradients::Kernel,
-            grad_h: false,
-            artificial_stress: Some(0.2),
-            fixed_h: true,
-            ..Scheme::PAPER
-        }
+        let mut s = Scheme::PAPER;
+        s.gradients = sph_core::Gradients::Kernel;
+        s.grad_h = false;
+        s.artificial_stress = Some(0.2);
+        s.fixed_h = true;
+        s
     }
 
     /// The clockwise angular momentum `-L_z` against the continuum's

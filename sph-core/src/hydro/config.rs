@@ -12,7 +12,11 @@ use sph_tree::Curve;
 /// Everything a run of the hydrodynamics needs besides the particles and
 /// the kernel: the scheme (discretisation), the physics (EOS, gravity)
 /// and the numerical controls.
+///
+/// It will grow: build one with [`HydroConfig::with_scheme`] (or
+/// `Default`) and set fields.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct HydroConfig {
     /// The discretisation: gradients, grad-h, viscosity, conductivity.
     pub scheme: Scheme,
@@ -48,6 +52,21 @@ impl Default for HydroConfig {
 }
 
 impl HydroConfig {
+    /// The default controls and physics (ideal gas, 5/3) with `scheme`.
+    ///
+    /// ```
+    /// use sph_core::{HydroConfig, Scheme};
+    /// let c = HydroConfig::with_scheme(Scheme::STD);
+    /// assert_eq!(c.scheme, Scheme::STD);
+    /// assert_eq!(c.bucket, HydroConfig::default().bucket);
+    /// ```
+    pub fn with_scheme(scheme: Scheme) -> Self {
+        Self {
+            scheme,
+            ..Self::default()
+        }
+    }
+
     /// Checks the scheme, the EOS and the numerical controls.
     ///
     /// # Errors
