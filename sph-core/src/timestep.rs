@@ -173,7 +173,8 @@ impl TimestepParams {
     /// use sph_core::timestep::{FirstStep, TimestepParams};
     /// let ramp = TimestepParams::default();
     /// assert_eq!(ramp.growth_base(1, 1e-6), 1e-6);
-    /// let free = TimestepParams { first_step: FirstStep::Criteria, ..ramp };
+    /// let mut free = ramp;
+    /// free.first_step = FirstStep::Criteria;
     /// assert_eq!(free.growth_base(1, 1e-6), f64::INFINITY);
     /// assert_eq!(free.growth_base(2, 1e-6), 1e-6);
     /// ```
