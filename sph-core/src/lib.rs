@@ -51,6 +51,7 @@
 //! ```
 
 pub mod av_switch;
+mod choice;
 pub mod conduction;
 pub mod conserved;
 pub mod density;
@@ -70,6 +71,7 @@ pub mod scheme;
 pub mod timestep;
 
 pub use av_switch::{AvSwitchParams, SwitchForm};
+pub use choice::Choice;
 pub use conserved::Conserved;
 pub use eos::Eos;
 pub use error::CoreError;

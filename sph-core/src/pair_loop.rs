@@ -475,6 +475,25 @@ pub enum Gradients {
     Kernel,
 }
 
+/// `--gradients` and the `gradients` key.
+impl crate::Choice for Gradients {
+    const ALL: &'static [Self] = &[Gradients::Iad, Gradients::Kernel];
+
+    fn name(&self) -> &'static str {
+        match self {
+            Gradients::Iad => "iad",
+            Gradients::Kernel => "kernel",
+        }
+    }
+
+    fn help(&self) -> &'static str {
+        match self {
+            Gradients::Iad => "Integral approach to derivatives (exact for linear fields)",
+            Gradients::Kernel => "Plain kernel gradients",
+        }
+    }
+}
+
 /// A computation with the gradient operator as a compile-time choice
 /// (`IAD` true: the IAD matrices; false: plain kernel gradients), run by
 /// [`with_gradients`]: the one place where the run-time choice becomes a

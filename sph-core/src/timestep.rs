@@ -46,6 +46,31 @@ pub enum FirstStep {
     Criteria,
 }
 
+/// `--first-step` and the `first-step` key.
+impl crate::Choice for FirstStep {
+    const ALL: &'static [Self] = &[FirstStep::Ramp, FirstStep::Criteria];
+
+    fn name(&self) -> &'static str {
+        match self {
+            FirstStep::Ramp => "ramp",
+            FirstStep::Criteria => "criteria",
+        }
+    }
+
+    fn help(&self) -> &'static str {
+        match self {
+            FirstStep::Ramp => {
+                "At most 1.1 times the case's first dt, growing by 1.1 per step until a \
+                 time-step criterion takes over (SPH-EXA's start)"
+            }
+            FirstStep::Criteria => {
+                "The time-step criteria's step at once (Courant, density change, acceleration, \
+                 falling internal energy)"
+            }
+        }
+    }
+}
+
 impl Default for TimestepParams {
     fn default() -> Self {
         Self {

@@ -14,7 +14,7 @@ use sph_apps::watch::{Bounds, Watch, GRAVITY_MOMENTUM_BOUND};
 use sph_apps::{AppError, Simulation};
 use sph_comm::Communicator;
 use sph_core::PRESETS;
-use sph_core::{AvForm, Gradients, HydroConfig, Volume};
+use sph_core::{AvForm, Choice, Gradients, HydroConfig, Volume};
 use sph_kernels::{FastKernel, KernelChoice};
 use sph_tree::Curve;
 use std::ffi::OsString;

@@ -2,6 +2,7 @@
 //! scheme asks for), [`VolumeWeights`] (the elements a pass is given) and
 //! the per-pair weights each kind puts on the pressure terms.
 
+use crate::choice::Choice;
 use crate::pair_loop::{F64s, Group, LANES};
 use serde::{Deserialize, Serialize};
 
@@ -33,13 +34,28 @@ pub enum Volume {
     PressureEnergy,
 }
 
-impl Volume {
-    /// The name on the command line and in `config.toml` (`--volume`).
-    pub fn name(&self) -> &'static str {
+/// `--volume` and the `volume` key.
+impl Choice for Volume {
+    const ALL: &'static [Self] = &[Volume::Mass, Volume::Generalised, Volume::PressureEnergy];
+
+    fn name(&self) -> &'static str {
         match self {
             Volume::Mass => "mass",
             Volume::Generalised => "ve",
             Volume::PressureEnergy => "pressure-energy",
+        }
+    }
+
+    fn help(&self) -> &'static str {
+        match self {
+            Volume::Mass => "m / rho: the seed paper's",
+            Volume::Generalised => {
+                "SPH-EXA's generalised volume elements, X = m / rho0 (needs IAD)"
+            }
+            Volume::PressureEnergy => {
+                "Pressure-energy volumes, X = m u: a pressure that stays smooth across contact \
+                 discontinuities (needs u > 0)"
+            }
         }
     }
 }

@@ -1,11 +1,13 @@
 //! The artificial viscosity's forms: each is one [`AvForm`] value and one
 //! file holding its pair term and its Courant signal velocity. Adding a
-//! form is a variant here (with its name and its arm in [`with_form`])
-//! and its file beside this one.
+//! form is a variant here (with its name and help in the [`Choice`]
+//! impl, from which the command line takes its values, and its arm in
+//! [`with_form`]) and its file beside this one.
 
 mod paper;
 mod sph_exa;
 
+use crate::choice::Choice;
 use crate::pair_loop::F64s;
 use serde::{Deserialize, Serialize};
 
@@ -30,29 +32,28 @@ pub enum AvForm {
     SphExa,
 }
 
-impl AvForm {
-    /// Every form, in the order the command line lists them.
-    pub const ALL: [AvForm; 2] = [AvForm::Paper, AvForm::SphExa];
+/// `--av-form` and the `av-form` key.
+impl Choice for AvForm {
+    const ALL: &'static [Self] = &[AvForm::Paper, AvForm::SphExa];
 
-    /// The name on the command line and in `config.toml` (`--av-form`).
-    ///
-    /// ```
-    /// use sph_core::AvForm;
-    /// for f in AvForm::ALL {
-    ///     assert_eq!(AvForm::from_name(f.name()), Some(f));
-    /// }
-    /// assert_eq!(AvForm::from_name("nope"), None);
-    /// ```
-    pub fn name(&self) -> &'static str {
+    fn name(&self) -> &'static str {
         match self {
             AvForm::Paper => "paper",
             AvForm::SphExa => "sph-exa",
         }
     }
 
-    /// The form called `name` ([`name`](Self::name)), if any.
-    pub fn from_name(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|f| f.name() == name)
+    fn help(&self) -> &'static str {
+        match self {
+            AvForm::Paper => {
+                "The seed paper's: Pi_ij = -alpha_ij/2 (c_i + c_j - 3 w_ij) w_ij, and the \
+                 Courant signal velocity c_i + c_j - 3 min(w_ij, 0)"
+            }
+            AvForm::SphExa => {
+                "SPH-EXA's `ve`: Pi_ij = -(alpha_ij/2 (c_i + c_j) - 2 w_ij) w_ij (its beta = 2 \
+                 term not scaled by alpha), and the Courant signal velocity (c_i + c_j)/2 - 2 w_ij"
+            }
+        }
     }
 }
 
