@@ -435,25 +435,13 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             rho: &mut p.rho,
             omega: &mut p.omega,
         };
-        if self.config.scheme.volume == Volume::PressureEnergy {
-            pressure_energy_density(
-                &self.kernel,
-                bbox,
-                positions!(p),
-                &self.buf.xm,
-                &self.list,
-                out,
-            );
+        let density_of_elements = if self.config.scheme.volume == Volume::PressureEnergy {
+            pressure_energy_density::<K>
         } else {
-            ve_density(
-                &self.kernel,
-                bbox,
-                positions!(p),
-                &self.buf.xm,
-                &self.list,
-                out,
-            );
-        }
+            ve_density::<K>
+        };
+        let (kernel, xm, list) = (&self.kernel, &self.buf.xm, &self.list);
+        density_of_elements(kernel, bbox, positions!(p), xm, list, out);
         Ok(())
     }
 

@@ -153,15 +153,7 @@ pub fn momentum_energy<K: Kernel>(
     nl: &CompactNeighborList,
     out: Rates<'_>,
 ) -> MomentumStats {
-    let scheme = MomentumScheme {
-        gradients,
-        alpha: Alpha::Constant(alpha),
-        av_form: AvForm::Paper,
-        volumes: VolumeWeights::Mass,
-        stress: None,
-        cleaning: None,
-        conduction: None,
-    };
+    let scheme = MomentumScheme::paper(gradients, Alpha::Constant(alpha));
     momentum_energy_with(kernel, bbox, s, f, scheme, nl, out)
 }
 
@@ -183,15 +175,7 @@ pub fn momentum_energy_switched<K: Kernel>(
     nl: &CompactNeighborList,
     out: Rates<'_>,
 ) -> MomentumStats {
-    let scheme = MomentumScheme {
-        gradients,
-        alpha: Alpha::PerParticle(alpha),
-        av_form: AvForm::Paper,
-        volumes: VolumeWeights::Mass,
-        stress: None,
-        cleaning: None,
-        conduction: None,
-    };
+    let scheme = MomentumScheme::paper(gradients, Alpha::PerParticle(alpha));
     momentum_energy_with(kernel, bbox, s, f, scheme, nl, out)
 }
 
@@ -224,6 +208,22 @@ pub struct MomentumScheme<'a> {
     /// Artificial conductivity added to du/dt, or none (the sum of
     /// [`conduction`](crate::conduction::conduction), in this pass).
     pub conduction: Option<Conductivity<'a>>,
+}
+
+impl<'a> MomentumScheme<'a> {
+    /// The seed paper's pass with `gradients` and the strength `alpha`:
+    /// mass volumes, its viscosity form, no stress, cleaning or conduction.
+    pub fn paper(gradients: Gradients, alpha: Alpha<'a>) -> Self {
+        Self {
+            gradients,
+            alpha,
+            av_form: AvForm::Paper,
+            volumes: VolumeWeights::Mass,
+            stress: None,
+            cleaning: None,
+            conduction: None,
+        }
+    }
 }
 
 /// Accelerations and du/dt of every target of `nl` for any scheme
