@@ -9,24 +9,26 @@
 use crate::analysis::{self, Bin, L1};
 use crate::cases::{Reference, Scene, Share};
 use crate::output::conserved::ConservedCsv;
-use crate::output::curve::CurveCsv;
+use crate::output::curve::{CurveCsv, CurveObserver};
 use crate::output::energies::EnergyTrack;
+use crate::output::files::FileOutputs;
+use crate::output::observer::{self, StepObserver, StepView};
 use crate::output::progress::ProgressReporter;
-use crate::output::snapshot::{self as snapfile, Schedule};
-use crate::output::timings::{StageTotals, TimingsCsv};
+use crate::output::snapshot as snapfile;
+use crate::output::timings::{RankTimings, StageTotals, TimingsCsv};
 use crate::output::{particles, profile, summary};
 use crate::watch::{self, Watch, WatchSummary};
-use crate::{checkpoint, AppError};
+use crate::AppError;
 use serde::Serialize;
 use sph_comm::{Communicator, ReduceOp, SerialComm};
-use sph_core::{Conserved, Hydro, RunState};
+use sph_core::{Conserved, Hydro, RunState, StepReport};
 use sph_domain::DomainConfig;
-use sph_io::{Attr, Snapshot};
 use sph_kernels::FastKernel;
 use std::path::Path;
 use std::time::Instant;
 
 pub use crate::output::energies::EnergyCheck;
+pub use crate::output::files::{CheckpointEvery, IoSummary, Outputs};
 pub use crate::output::progress::{Progress, Stop};
 pub use crate::output::timings::DomainSummary;
 
@@ -110,55 +112,6 @@ pub struct Summary {
     pub watch: WatchSummary,
 }
 
-/// The snapshot and checkpoint files of a run.
-#[derive(Debug, Clone, Copy, Default, Serialize)]
-pub struct IoSummary {
-    /// Snapshot files written.
-    pub snapshots: u64,
-    /// Mean seconds per snapshot file (the slowest rank's).
-    pub snapshot_seconds_mean: f64,
-    /// Checkpoint files written.
-    pub checkpoints: u64,
-    /// Mean seconds per checkpoint file (the slowest rank's).
-    pub checkpoint_seconds_mean: f64,
-    /// With `--checkpoint-every auto`: the last interval chosen,
-    /// sqrt(2 C M) seconds of wall-clock time.
-    pub checkpoint_interval_s: Option<f64>,
-}
-
-/// When checkpoints are written.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum CheckpointEvery {
-    /// After every step whose number is a multiple of this.
-    Steps(u64),
-    /// After the first step reaching each multiple of this simulated time.
-    Time(f64),
-    /// When this many wall-clock seconds have passed since the last one
-    /// (the ranks agree through one max-reduction per step, the only
-    /// collective the schedules add; `Auto` likewise).
-    Wall(f64),
-    /// Young/Daly: every sqrt(2 C M) seconds of wall-clock time, with C the
-    /// measured time of the last checkpoint (the first is written after
-    /// step 1 to measure it) and M the mean time between failures, seconds.
-    Auto {
-        /// Mean time between failures, seconds.
-        mtbf_s: f64,
-    },
-}
-
-/// Snapshot and checkpoint outputs of a run (none by default).
-#[derive(Debug, Clone, Default)]
-pub struct Outputs {
-    /// Snapshot fields (`x`, `rho`, ...; see
-    /// [`crate::output::snapshot::base_fields`]) and schedule.
-    pub snapshots: Option<(Vec<String>, Schedule)>,
-    /// Checkpoint schedule and how many of this run's checkpoints to keep
-    /// (older ones are deleted once a newer one is complete; 0 keeps all).
-    pub checkpoints: Option<(CheckpointEvery, usize)>,
-    /// Attributes of every snapshot and checkpoint (the run's settings).
-    pub attrs: Vec<(String, Attr)>,
-}
-
 /// A run in progress: the scene's particles (this rank's share) and the
 /// pipeline.
 #[derive(Debug)]
@@ -202,7 +155,7 @@ impl<C: Communicator> Simulation<C> {
 
     /// Continues a run from a checkpoint: `scene` holds the checkpoint's
     /// particles (this rank's share, with their integrator history, see
-    /// [`checkpoint::particles`]) and box, `state` its run state. Steps,
+    /// [`checkpoint::particles`](crate::checkpoint::particles)) and box, `state` its run state. Steps,
     /// time and every output go on from there; `conserved.csv` in the
     /// output folder keeps its lines up to the checkpoint's step.
     pub fn resume(
@@ -342,59 +295,26 @@ impl<C: Communicator> Simulation<C> {
 
     /// Runs until `stop`, writing outputs into `out` (created if needed, by
     /// rank 0, which writes every file). Collective: every rank calls it.
+    /// After every step the run's observers ([`StepObserver`]) write its
+    /// lines and files in turn; an error stops the run with the files of
+    /// the steps before it (and its last checkpoint) intact.
     pub fn run(&mut self, stop: Stop, out: &Path, progress: Progress) -> Result<Summary, AppError> {
         let root = self.is_root();
-        let mut logs = None;
-        if root {
-            std::fs::create_dir_all(out).map_err(|e| AppError::io(out, e))?;
-            let path = out.join("conserved.csv");
-            logs = Some((
-                match self.resumed_at {
-                    Some(step) => ConservedCsv::resume(&path, step)?,
-                    None => ConservedCsv::create(&path)?,
-                },
-                TimingsCsv::create(&out.join("timings.csv"))?,
-            ));
-        }
-        let mut rank_log = (self.rank_timings && !root)
-            .then(|| self.rank_timings_file(out))
-            .flatten();
         let n = self.total;
-        let mut bar = ProgressReporter::new(if root { progress } else { Progress::Quiet }, stop);
-        let start = Instant::now();
-        let mut first: Option<Conserved> = None;
-        let mut totals = StageTotals::new(n);
-        let mut energies = EnergyTrack::new();
-        let mut fallbacks = 0;
-        let mut neighbors_total = None;
-        let t0 = match self.resumed_at {
-            Some(_) => self.hydro.time(),
-            None => f64::NEG_INFINITY,
-        };
-        let mut curve = match (root, self.scene.curve) {
-            (true, Some(c)) => Some(match self.resumed_at {
-                Some(step) => CurveCsv::resume(&out.join("curve.csv"), c, step)?,
-                None => CurveCsv::create(&out.join("curve.csv"), c)?,
-            }),
-            _ => None,
-        };
-        let mut files = FileOutputs::new(&self.outputs, out, t0)?;
-        if files.any() && root {
-            for dir in [files.snapshot_dir.as_path(), files.checkpoint_dir.as_path()] {
-                std::fs::create_dir_all(dir).map_err(|e| AppError::io(dir, e))?;
-            }
-        }
+        let mut outputs = self.open_outputs(stop, out, progress)?;
         if let Some(w) = self.watch.as_mut() {
             let all = 0..self.scene.particles.len();
             let reads_u = self.scene.config.eos.uses_internal_energy();
             let comm = self.hydro.domain().comm();
             w.check_initial(&self.scene.particles, all, comm, root, reads_u)?;
         }
+        let mut tally = Tally::new(n);
+        let start = outputs.start;
+        let mut observers = outputs.observers(self.watch.as_mut());
         loop {
             let t = self.hydro.time();
-            let steps = self.hydro.steps();
             match stop {
-                Stop::Steps(s) if steps >= s => break,
+                Stop::Steps(s) if self.hydro.steps() >= s => break,
                 Stop::Time(te) if t >= te * (1.0 - 1e-12) => break,
                 _ => {}
             }
@@ -411,147 +331,39 @@ impl<C: Communicator> Simulation<C> {
             if let Some(hook) = self.after_step {
                 hook();
             }
-            first.get_or_insert(r.conserved);
-            energies.push(r.t, &r.conserved);
-            totals.record(&r);
-            fallbacks += r.energy_fallbacks;
-            if let Some(file) = rank_log.as_mut() {
-                if let Err(e) = file.step(&r, &totals) {
-                    eprintln!("warning: {e}; this rank's timings stop here");
-                    rank_log = None;
-                }
-            }
-            if let Some((conserved, timings)) = logs.as_mut() {
-                conserved.step(&r, n)?;
-                timings.step(&r, &totals)?;
-            }
-            if let Some(c) = &self.scene.curve {
-                // Collective: every rank adds its particles.
-                let values = analysis::curve_values(
-                    &self.scene.particles,
-                    self.hydro.owned(),
-                    self.hydro.domain().comm(),
-                    c,
-                );
-                // The values are of the particles after the step.
-                if let Some(file) = curve.as_mut() {
-                    file.push(r.step, self.hydro.time(), values)?;
-                }
-            }
-            if let Some(w) = self.watch.as_mut() {
-                let checked = w.check_step(
-                    &r,
-                    &self.scene.particles,
-                    self.hydro.owned(),
-                    self.hydro.domain().comm(),
-                    root,
-                );
-                if checked.is_err() {
-                    bar.finish();
-                }
-                checked?;
-            }
-            bar.update(&r, self.hydro.time());
-            neighbors_total = Some(r.neighbors.total);
-            if files.any() && self.write_files(&mut files)? {
-                // The lines up to a checkpoint are on disk with it, so a
-                // run killed later resumes them (ConservedCsv::resume).
-                if let Some((conserved, timings)) = logs.as_mut() {
-                    conserved.flush()?;
-                    timings.flush()?;
-                }
-                if let Some(file) = curve.as_mut() {
-                    file.flush()?;
-                }
-            }
+            tally.record(&r);
+            let view = StepView {
+                report: &r,
+                totals: &tally.totals,
+                state: self.hydro.run_state(),
+                particles: &self.scene.particles,
+                owned: self.hydro.owned(),
+                bbox: &self.scene.bbox,
+                comm: self.hydro.domain().comm(),
+                total: n,
+            };
+            observer::notify(&mut observers, &view)?;
         }
         let wall_s = start.elapsed().as_secs_f64();
-        if let Some(Err(e)) = rank_log.map(|file| file.finish(&totals)) {
-            eprintln!("warning: {e}");
-        }
-        bar.finish();
+        observers.iter_mut().for_each(|o| o.ended(&tally.totals));
         let solver_peak_rss = self
             .hydro
             .domain()
             .comm()
             .all_reduce_scalar(analysis::peak_rss_bytes(), ReduceOp::Max);
-        if let Some((conserved, timings)) = logs.as_mut() {
-            conserved.flush()?;
-            timings.flush()?;
-        }
-        if let Some(file) = curve.as_mut() {
-            file.flush()?;
-            file.plot(
-                &out.join("curve.png"),
-                &format!("{}, {n} particles", self.scene.case),
-            )?;
-        }
+        observers.iter_mut().try_for_each(|o| o.finish())?;
+        drop(observers);
 
         let end = self.observe_end()?;
-        energies.push(end.t, &end.conserved);
-        let first = first.unwrap_or(end.conserved);
-        let case = self.scene.case;
-        let mean_step_s = totals.mean_step_s();
-        let per_particle = |x: f64| x / n.max(1) as f64;
-        let norm = |v: [f64; 3]| nalgebra::Vector3::from(v).norm();
-        let dp = norm(std::array::from_fn(|k| {
-            end.conserved.momentum[k] - first.momentum[k]
-        }));
-        let l0 = first.angular_momentum;
-        let dl = norm(std::array::from_fn(|k| {
-            end.conserved.angular_momentum[k] - l0[k]
-        }));
-        let [scale_p, l_abs] = end.drift_scales;
-        // A scale for round-off: sum m |x||v| (at the end), unless the
-        // initial angular momentum is itself significant.
-        let l_scale = if norm(l0) > 1e-6 * l_abs {
-            norm(l0)
-        } else {
-            l_abs
-        };
-        let mut summary = Summary {
-            case: case.to_string(),
-            particles: n,
-            steps: self.hydro.steps(),
-            t_end: end.t,
-            wall_s,
-            mean_step_s,
-            particle_steps_per_s: n as f64 / mean_step_s,
-            peak_rss_bytes: 0,
-            solver_peak_rss_bytes: solver_peak_rss,
-            bytes_per_particle: per_particle(end.buffer_bytes as f64),
-            threads: rayon::current_num_threads(),
-            kernel: self.kernel_name.clone(),
-            kernel_form: self.hydro.kernel().describe(),
-            neighbors_mean: neighbors_total.map_or(0.0, |t| per_particle(t as f64)),
-            stage_seconds: totals.stage_seconds(),
-            dt_limits: totals.dt_limits(),
-            l1: end.l1,
-            energy_rel_drift: (end.conserved.e_tot() - first.e_tot()) / first.e_tot().abs(),
-            momentum_rel_drift: if scale_p > 0.0 { dp / scale_p } else { dp },
-            angular_momentum_rel_drift: if l_scale > 0.0 { dl / l_scale } else { dl },
-            shock_radius: end.shock_radius,
-            shock_radius_ref: end.shock_radius_ref,
-            peak_density: end.peak_density,
-            plateau_density: end.plateau,
-            plateau_density_ref: end.plateau_ref,
-            min_pair_distance: end.min_pair_distance,
-            angular_momentum_z: [first.angular_momentum[2], end.conserved.angular_momentum[2]],
-            energy_fallbacks: fallbacks,
-            ranks: self.hydro.domain().comm().size(),
-            domain: totals.domain(),
-            energies: energies.checks(self.scene.energies.unwrap_or(&[]), end.t),
-            io: files.any().then_some(files.summary),
-            watch: self
-                .watch
-                .as_ref()
-                .map_or_else(WatchSummary::default, Watch::summary),
-        };
-
+        tally.energies.push(end.t, &end.conserved);
+        let io = outputs.files.any().then_some(outputs.files.summary);
+        let mut summary = self.summary(&tally, &end, wall_s, solver_peak_rss, io);
         // Rank 0's files; an error is returned after the collectives below,
         // so that the other ranks do not wait for rank 0 forever.
-        let written = match logs {
-            Some((_, timings)) => self.write_root_outputs(out, timings, &totals, &end, &energies),
+        let written = match outputs.logs {
+            Some((_, timings)) => {
+                self.write_root_outputs(out, timings, &tally.totals, &end, &tally.energies)
+            }
             None => Ok(()),
         };
         let comm = self.hydro.domain().comm();
@@ -571,21 +383,136 @@ impl<C: Communicator> Simulation<C> {
         Ok(summary)
     }
 
-    /// This rank's `timings.rankR.csv` ([`set_rank_timings`](Self::set_rank_timings)),
-    /// or a warning and `None`: an error here must not make this rank
-    /// leave the others waiting in a collective.
-    fn rank_timings_file(&self, out: &Path) -> Option<TimingsCsv> {
+    /// Opens the outputs of a run into `out`: rank 0's `conserved.csv` and
+    /// `timings.csv` (continued after a restart's step), this rank's own
+    /// timings with [`set_rank_timings`](Self::set_rank_timings), the
+    /// progress report, the case's curve and the snapshot and checkpoint
+    /// files.
+    fn open_outputs(
+        &self,
+        stop: Stop,
+        out: &Path,
+        progress: Progress,
+    ) -> Result<RunOutputs, AppError> {
+        let root = self.is_root();
+        let mut logs = None;
+        if root {
+            std::fs::create_dir_all(out).map_err(|e| AppError::io(out, e))?;
+            let path = out.join("conserved.csv");
+            logs = Some((
+                match self.resumed_at {
+                    Some(step) => ConservedCsv::resume(&path, step)?,
+                    None => ConservedCsv::create(&path)?,
+                },
+                TimingsCsv::create(&out.join("timings.csv"))?,
+            ));
+        }
         let rank = self.hydro.domain().comm().rank();
-        let path = out.join(format!("timings.rank{rank}.csv"));
-        let file = std::fs::create_dir_all(out)
-            .map_err(|e| AppError::io(out, e))
-            .and_then(|()| TimingsCsv::create(&path));
-        match file {
-            Ok(f) => Some(f),
-            Err(e) => {
-                eprintln!("warning: {e}; rank {rank} writes no timings");
-                None
+        let rank_log = (self.rank_timings && !root).then(|| RankTimings::open(out, rank));
+        let bar = ProgressReporter::new(if root { progress } else { Progress::Quiet }, stop);
+        let start = Instant::now();
+        let t0 = match self.resumed_at {
+            Some(_) => self.hydro.time(),
+            None => f64::NEG_INFINITY,
+        };
+        let curve = match self.scene.curve {
+            Some(c) => {
+                let path = out.join("curve.csv");
+                let file = match (root, self.resumed_at) {
+                    (false, _) => None,
+                    (true, Some(step)) => Some(CurveCsv::resume(&path, c, step)?),
+                    (true, None) => Some(CurveCsv::create(&path, c)?),
+                };
+                let title = format!("{}, {} particles", self.scene.case, self.total);
+                Some(CurveObserver::new(c, file, (out.join("curve.png"), title)))
             }
+            None => None,
+        };
+        let files = FileOutputs::new(&self.outputs, self.scene.case, out, t0)?;
+        if files.any() && root {
+            files.create_dirs()?;
+        }
+        Ok(RunOutputs {
+            logs,
+            rank_log,
+            bar,
+            start,
+            curve,
+            files,
+        })
+    }
+
+    /// The summary of the run that `tally` recorded, ending in `end`.
+    fn summary(
+        &self,
+        tally: &Tally,
+        end: &EndState,
+        wall_s: f64,
+        solver_peak_rss: u64,
+        io: Option<IoSummary>,
+    ) -> Summary {
+        let n = self.total;
+        let totals = &tally.totals;
+        let first = tally.first.unwrap_or(end.conserved);
+        let mean_step_s = totals.mean_step_s();
+        let per_particle = |x: f64| x / n.max(1) as f64;
+        let norm = |v: [f64; 3]| nalgebra::Vector3::from(v).norm();
+        let dp = norm(std::array::from_fn(|k| {
+            end.conserved.momentum[k] - first.momentum[k]
+        }));
+        let l0 = first.angular_momentum;
+        let dl = norm(std::array::from_fn(|k| {
+            end.conserved.angular_momentum[k] - l0[k]
+        }));
+        let [scale_p, l_abs] = end.drift_scales;
+        // A scale for round-off: sum m |x||v| (at the end), unless the
+        // initial angular momentum is itself significant.
+        let l_scale = if norm(l0) > 1e-6 * l_abs {
+            norm(l0)
+        } else {
+            l_abs
+        };
+        Summary {
+            case: self.scene.case.to_string(),
+            particles: n,
+            steps: self.hydro.steps(),
+            t_end: end.t,
+            wall_s,
+            mean_step_s,
+            particle_steps_per_s: n as f64 / mean_step_s,
+            peak_rss_bytes: 0,
+            solver_peak_rss_bytes: solver_peak_rss,
+            bytes_per_particle: per_particle(end.buffer_bytes as f64),
+            threads: rayon::current_num_threads(),
+            kernel: self.kernel_name.clone(),
+            kernel_form: self.hydro.kernel().describe(),
+            neighbors_mean: tally
+                .neighbors_total
+                .map_or(0.0, |t| per_particle(t as f64)),
+            stage_seconds: totals.stage_seconds(),
+            dt_limits: totals.dt_limits(),
+            l1: end.l1,
+            energy_rel_drift: (end.conserved.e_tot() - first.e_tot()) / first.e_tot().abs(),
+            momentum_rel_drift: if scale_p > 0.0 { dp / scale_p } else { dp },
+            angular_momentum_rel_drift: if l_scale > 0.0 { dl / l_scale } else { dl },
+            shock_radius: end.shock_radius,
+            shock_radius_ref: end.shock_radius_ref,
+            peak_density: end.peak_density,
+            plateau_density: end.plateau,
+            plateau_density_ref: end.plateau_ref,
+            min_pair_distance: end.min_pair_distance,
+            angular_momentum_z: [first.angular_momentum[2], end.conserved.angular_momentum[2]],
+            energy_fallbacks: tally.fallbacks,
+            ranks: self.hydro.domain().comm().size(),
+            domain: totals.domain(),
+            energies: tally
+                .energies
+                .checks(self.scene.energies.unwrap_or(&[]), end.t),
+            io,
+            watch: self
+                .watch
+                .as_ref()
+                .map_or_else(WatchSummary::default, Watch::summary),
         }
     }
 
@@ -611,85 +538,6 @@ impl<C: Communicator> Simulation<C> {
             )?;
         }
         Ok(())
-    }
-
-    /// The snapshot and checkpoint due after the step just taken (before
-    /// anything else touches the particles). Collective. Returns whether a
-    /// checkpoint was written.
-    fn write_files(&mut self, files: &mut FileOutputs) -> Result<bool, AppError> {
-        let state = self.hydro.run_state();
-        let (step, t) = (state.step, state.t);
-        let owned = self.hydro.owned();
-        let p = &self.scene.particles;
-        let comm = self.hydro.domain().comm();
-        let mut attrs = self.outputs.attrs.clone();
-        attrs.push(("case".into(), Attr::Str(self.scene.case.into())));
-        let snapshot_due = files
-            .snapshots
-            .as_mut()
-            .is_some_and(|(_, s)| s.due(step, t));
-        if snapshot_due {
-            let fields = &files.snapshots.as_ref().expect("snapshots on").0;
-            let mut snap =
-                Snapshot::new(step, t, state.dt_prev, snapfile::box_spec(&self.scene.bbox));
-            for (name, value) in &attrs {
-                snap.set_attr(name, value.clone());
-            }
-            snap.set_attr("sphexa_kind", Attr::Str("snapshot".into()));
-            for name in fields {
-                let data = snapfile::field(p, owned.clone(), name).expect("checked by set_outputs");
-                snap.set_field(name, data);
-            }
-            let path = snapfile::numbered(&files.snapshot_dir, "snapshot", step);
-            let seconds = snapfile::write(comm, &path, &snap)?;
-            let io = &mut files.summary;
-            io.snapshot_seconds_mean = (io.snapshot_seconds_mean * io.snapshots as f64 + seconds)
-                / (io.snapshots + 1) as f64;
-            io.snapshots += 1;
-        }
-        let checkpoint_due = match files.checkpoint_every {
-            None => false,
-            Some(CheckpointEvery::Steps(_) | CheckpointEvery::Time(_)) => {
-                files.checkpoint_schedule.due(step, t)
-            }
-            Some(CheckpointEvery::Wall(interval)) => {
-                let late = files.last_checkpoint.elapsed().as_secs_f64() >= interval;
-                comm.all_reduce_scalar(u64::from(late), ReduceOp::Max) > 0
-            }
-            Some(CheckpointEvery::Auto { mtbf_s }) => {
-                let late = match files.checkpoint_cost {
-                    None => true,
-                    Some(c) => {
-                        let interval = (2.0 * c * mtbf_s).sqrt();
-                        files.summary.checkpoint_interval_s = Some(interval);
-                        files.last_checkpoint.elapsed().as_secs_f64() >= interval
-                    }
-                };
-                comm.all_reduce_scalar(u64::from(late), ReduceOp::Max) > 0
-            }
-        };
-        if checkpoint_due {
-            let snap = checkpoint::snapshot(p, owned, state, &self.scene.bbox, &attrs);
-            let path = snapfile::numbered(&files.checkpoint_dir, "checkpoint", step);
-            let nth = files.summary.checkpoints + 1;
-            let pause = files.pause.as_ref();
-            let seconds = snapfile::write_then_commit(comm, &path, &snap, || {
-                pause.map_or(Ok(()), |p| p.pause_if_due(nth, &path))
-            })?;
-            files.checkpoint_cost = Some(seconds);
-            files.last_checkpoint = Instant::now();
-            let io = &mut files.summary;
-            io.checkpoint_seconds_mean = (io.checkpoint_seconds_mean * io.checkpoints as f64
-                + seconds)
-                / (io.checkpoints + 1) as f64;
-            io.checkpoints += 1;
-            files.written.push(path);
-            if files.keep > 0 && files.written.len() > files.keep && comm.rank() == 0 {
-                let old = files.written.remove(0);
-                std::fs::remove_file(&old).map_err(|e| AppError::io(&old, e))?;
-            }
-        }
-        Ok(checkpoint_due)
     }
 
     /// Recomputes density and pressure at the final positions, then every
@@ -783,60 +631,82 @@ impl<C: Communicator> Simulation<C> {
     }
 }
 
-/// The file outputs of a run in progress: schedules, folders, what was
-/// written.
+/// The outputs of a run in progress, opened by
+/// [`Simulation::open_outputs`].
 #[derive(Debug)]
-struct FileOutputs {
-    snapshots: Option<(Vec<String>, Schedule)>,
-    snapshot_dir: std::path::PathBuf,
-    checkpoint_every: Option<CheckpointEvery>,
-    checkpoint_schedule: Schedule,
-    checkpoint_dir: std::path::PathBuf,
-    keep: usize,
-    written: Vec<std::path::PathBuf>,
-    checkpoint_cost: Option<f64>,
-    last_checkpoint: Instant,
-    summary: IoSummary,
-    /// The test hook of [`checkpoint`], if set.
-    pause: Option<checkpoint::TestPause>,
+struct RunOutputs {
+    /// Rank 0's `conserved.csv` and `timings.csv`.
+    logs: Option<(ConservedCsv, TimingsCsv)>,
+    /// This rank's own timings (ranks but 0, with `--rank-timings`).
+    rank_log: Option<RankTimings>,
+    bar: ProgressReporter,
+    /// When the loop's clock started (`wall_s` of the summary).
+    start: Instant,
+    curve: Option<CurveObserver>,
+    files: FileOutputs,
 }
 
-impl FileOutputs {
-    fn new(o: &Outputs, out: &Path, t0: f64) -> Result<Self, AppError> {
-        let (every, keep) = match o.checkpoints {
-            Some((e, k)) => (Some(e), k),
-            None => (None, 0),
-        };
-        let checkpoint_schedule = match every {
-            Some(CheckpointEvery::Steps(n)) => Schedule::new(Some(n), None, Vec::new(), t0),
-            Some(CheckpointEvery::Time(dt)) => Schedule::new(None, Some(dt), Vec::new(), t0),
-            _ => Schedule::default(),
-        };
-        let snapshots = o.snapshots.clone().map(|(f, s)| {
-            let s = Schedule::new(s.every_steps, s.every_time, s.at.clone(), t0);
-            (f, s)
-        });
-        let pause = match every {
-            Some(_) => checkpoint::TestPause::from_env()?,
-            None => None,
-        };
-        Ok(FileOutputs {
-            snapshots,
-            snapshot_dir: out.join("snapshots"),
-            checkpoint_every: every,
-            checkpoint_schedule,
-            checkpoint_dir: out.join("checkpoints"),
-            keep,
-            written: Vec::new(),
-            checkpoint_cost: None,
-            last_checkpoint: Instant::now(),
-            summary: IoSummary::default(),
-            pause,
-        })
+impl RunOutputs {
+    /// The observers of every step, in the order they see it: the lines
+    /// of the step, the watch, the progress report, then the files due.
+    fn observers<'a, C: Communicator>(
+        &'a mut self,
+        watch: Option<&'a mut Watch>,
+    ) -> Vec<Box<dyn StepObserver<C> + 'a>> {
+        let mut list: Vec<Box<dyn StepObserver<C> + 'a>> = Vec::new();
+        if let Some(r) = self.rank_log.as_mut() {
+            list.push(Box::new(r));
+        }
+        if let Some((conserved, timings)) = self.logs.as_mut() {
+            list.push(Box::new(conserved));
+            list.push(Box::new(timings));
+        }
+        if let Some(c) = self.curve.as_mut() {
+            list.push(Box::new(c));
+        }
+        if let Some(w) = watch {
+            list.push(Box::new(w));
+        }
+        list.push(Box::new(&mut self.bar));
+        list.push(Box::new(&mut self.files));
+        list
+    }
+}
+
+/// What the summary takes from the steps of a run.
+#[derive(Debug)]
+struct Tally {
+    /// The conserved quantities after the first step.
+    first: Option<Conserved>,
+    /// Energies of every step.
+    energies: EnergyTrack,
+    /// Stage times and decomposition figures.
+    totals: StageTotals,
+    /// Energy updates that fell back to first order.
+    fallbacks: usize,
+    /// Neighbours of the last step.
+    neighbors_total: Option<usize>,
+}
+
+impl Tally {
+    /// Nothing recorded yet, for `n` particles.
+    fn new(n: usize) -> Self {
+        Self {
+            first: None,
+            energies: EnergyTrack::new(),
+            totals: StageTotals::new(n),
+            fallbacks: 0,
+            neighbors_total: None,
+        }
     }
 
-    fn any(&self) -> bool {
-        self.snapshots.is_some() || self.checkpoint_every.is_some()
+    /// Records step `r`.
+    fn record(&mut self, r: &StepReport) {
+        self.first.get_or_insert(r.conserved);
+        self.energies.push(r.t, &r.conserved);
+        self.totals.record(r);
+        self.fallbacks += r.energy_fallbacks;
+        self.neighbors_total = Some(r.neighbors.total);
     }
 }
 

@@ -15,6 +15,7 @@
 //! the particle named; a mass <= 0 is a violation of `particle mass` (a
 //! warning, an error with `strict`).
 
+use crate::output::observer::{Observed, StepObserver, StepView};
 use crate::AppError;
 use serde::Serialize;
 use sph_comm::{Communicator, ReduceOp};
@@ -479,6 +480,21 @@ pub fn locate(e: CoreError, p: &Particles, owned: Range<usize>) -> AppError {
             position: [p.x[i], p.y[i], p.z[i]],
         },
         None => AppError::Core(e),
+    }
+}
+
+/// The watch checks every step's conserved quantities (collective).
+impl<C: Communicator> StepObserver<C> for Watch {
+    fn step(&mut self, view: &StepView<'_, C>) -> Result<Observed, AppError> {
+        let root = view.comm.rank() == 0;
+        self.check_step(
+            view.report,
+            view.particles,
+            view.owned.clone(),
+            view.comm,
+            root,
+        )?;
+        Ok(Observed::Recorded)
     }
 }
 

@@ -1,6 +1,7 @@
 //! `conserved.csv`: the conserved quantities and neighbour counts of every
 //! step, in full precision.
 
+use super::observer::{Observed, StepObserver, StepView};
 use super::CsvFile;
 use crate::AppError;
 use sph_core::StepReport;
@@ -62,5 +63,16 @@ impl ConservedCsv {
     /// Writes out what is buffered (at the end of the loop).
     pub fn flush(&mut self) -> Result<(), AppError> {
         self.0.flush()
+    }
+}
+
+impl<C> StepObserver<C> for ConservedCsv {
+    fn step(&mut self, view: &StepView<'_, C>) -> Result<Observed, AppError> {
+        ConservedCsv::step(self, view.report, view.total)?;
+        Ok(Observed::Recorded)
+    }
+
+    fn flush(&mut self) -> Result<(), AppError> {
+        ConservedCsv::flush(self)
     }
 }

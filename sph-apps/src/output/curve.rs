@@ -1,11 +1,14 @@
 //! `curve.csv` and `curve.png`: a case's tracked observable
 //! ([`Curve`]) at every step.
 
+use super::observer::{Observed, StepObserver, StepView};
 use super::CsvFile;
+use crate::analysis;
 use crate::cases::Curve;
 use crate::AppError;
 use plotters::style::RGBColor;
-use std::path::Path;
+use sph_comm::Communicator;
+use std::path::{Path, PathBuf};
 
 /// The open `curve.csv` and the samples written so far (for the plot).
 #[derive(Debug)]
@@ -98,5 +101,49 @@ impl CurveCsv {
             &reference[..]
         };
         crate::plot::series_png(path, title, self.curve.label, &series, reference)
+    }
+}
+
+/// A case's tracked observable after every step: reduced over the ranks
+/// (collective: every rank holds one), written by rank 0 into
+/// `curve.csv`, and plotted as `curve.png` at the end.
+#[derive(Debug)]
+pub struct CurveObserver {
+    curve: Curve,
+    /// Rank 0's file.
+    file: Option<CurveCsv>,
+    /// `curve.png` and its title.
+    plot: (PathBuf, String),
+}
+
+impl CurveObserver {
+    /// The observer of `curve`, writing `file` (rank 0's, `None`
+    /// elsewhere); `plot` is `curve.png`'s path and title.
+    pub fn new(curve: Curve, file: Option<CurveCsv>, plot: (PathBuf, String)) -> Self {
+        Self { curve, file, plot }
+    }
+}
+
+impl<C: Communicator> StepObserver<C> for CurveObserver {
+    fn step(&mut self, view: &StepView<'_, C>) -> Result<Observed, AppError> {
+        let values =
+            analysis::curve_values(view.particles, view.owned.clone(), view.comm, &self.curve);
+        // The values are of the particles after the step.
+        if let Some(file) = self.file.as_mut() {
+            file.push(view.report.step, view.state.t, values)?;
+        }
+        Ok(Observed::Recorded)
+    }
+
+    fn flush(&mut self) -> Result<(), AppError> {
+        self.file.as_mut().map_or(Ok(()), CurveCsv::flush)
+    }
+
+    fn finish(&mut self) -> Result<(), AppError> {
+        if let Some(file) = self.file.as_mut() {
+            file.flush()?;
+            file.plot(&self.plot.0, &self.plot.1)?;
+        }
+        Ok(())
     }
 }

@@ -1,6 +1,9 @@
 //! Progress of a run on stderr: a bar on a terminal, a log line every few
 //! seconds otherwise.
 
+use super::observer::{Observed, StepObserver, StepView};
+use super::totals::StageTotals;
+use crate::AppError;
 use sph_core::StepReport;
 use std::io::IsTerminal;
 use std::time::Instant;
@@ -93,5 +96,25 @@ impl ProgressReporter {
         if let Some(b) = &self.bar {
             b.finish();
         }
+    }
+}
+
+/// The progress of rank 0's run. A stop by the watch (a bound crossed,
+/// non-finite sums) leaves the bar on the terminal at the last step that
+/// passed; any other error clears it.
+impl<C> StepObserver<C> for ProgressReporter {
+    fn step(&mut self, view: &StepView<'_, C>) -> Result<Observed, AppError> {
+        self.update(view.report, view.state.t);
+        Ok(Observed::Recorded)
+    }
+
+    fn stopped(&mut self, error: &AppError) {
+        if matches!(error, AppError::Watch(_) | AppError::NonFinite { .. }) {
+            ProgressReporter::finish(self);
+        }
+    }
+
+    fn ended(&mut self, _totals: &StageTotals) {
+        ProgressReporter::finish(self);
     }
 }

@@ -10,6 +10,10 @@
 //! `l1_*` columns; `case`, `scheme`, `kernel` name its series): its points
 //! are drawn over the plot.
 
+mod sweep;
+
+pub use sweep::Sweep;
+
 use crate::plot::{BenchLine, BenchPanel};
 use crate::AppError;
 use serde::{Deserialize, Serialize};
@@ -441,6 +445,49 @@ impl Report {
         let json = serde_json::to_string_pretty(self).expect("report serialises");
         std::fs::write(&path, json + "\n").map_err(|e| AppError::io(&path, e))?;
         crate::plot::bench_png(&out.join("error_vs_time.png"), title, &self.panels())
+    }
+
+    /// The plot's title: the cases of the runs, in order of their first
+    /// row (repeats of a case in a row named once).
+    pub fn title(&self) -> String {
+        let mut names: Vec<String> = self.runs.iter().map(|r| r.case.clone()).collect();
+        names.dedup();
+        format!("L1 against wall time: {}", names.join(", "))
+    }
+
+    /// The table `sphexa bench` prints: per series and size the median
+    /// wall time and a run's L1 errors, then the fitted orders (lines
+    /// without the last newline).
+    pub fn table(&self) -> String {
+        let mut lines = vec![format!(
+            "{:<28} {:>9} {:>6} {:>10} {:>10} {:>10} {:>10} {:>9}",
+            "series", "N", "steps", "wall_s", "L1 rho", "L1 P", "L1 |v|", "RSS MB"
+        )];
+        for sp in &self.spread {
+            let r = self
+                .runs
+                .iter()
+                .find(|r| r.series() == sp.series && r.n == sp.n)
+                .expect("a spread has runs");
+            lines.push(format!(
+                "{:<28} {:>9} {:>6} {:>10.3} {:>10.4e} {:>10.4e} {:>10.4e} {:>9.0}",
+                sp.series,
+                sp.n,
+                r.steps,
+                sp.wall_s_median,
+                r.l1_rho,
+                r.l1_p,
+                r.l1_v,
+                sp.peak_rss_bytes_median as f64 / 1e6
+            ));
+        }
+        for o in &self.orders {
+            lines.push(format!(
+                "order {:<28} {:<7} {:.3} (sizes {:?})",
+                o.series, o.field, o.order, o.sizes
+            ));
+        }
+        lines.join("\n")
     }
 
     /// The panels of `error_vs_time.png`: per L1 field, one line per

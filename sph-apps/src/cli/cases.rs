@@ -1,0 +1,74 @@
+//! `sphexa cases`: the registered cases with their defaults, and the
+//! scheme presets, each scheme written as the `sphexa run` options that
+//! select it.
+
+use crate::cases::{self, Physics, Scheme};
+use sph_core::{AvForm, Choice, Volume, PRESETS};
+
+/// `sphexa cases`: one line per case, then its default scheme as the
+/// options that would select it.
+pub(crate) fn list_cases() {
+    say!(
+        "{:<14} {:>6} {:>9}  description",
+        "case",
+        "side",
+        "end time"
+    );
+    for c in cases::registry() {
+        say!(
+            "{:<14} {:>6} {:>9}  {}",
+            c.name(),
+            c.default_side(),
+            c.default_end_time(),
+            c.description()
+        );
+        say!(
+            "{:<14} scheme: {}",
+            "",
+            scheme_options(&c.default_scheme(), c.physics())
+        );
+    }
+    say!("\nscheme presets (sphexa run CASE --scheme NAME):");
+    for (name, scheme, what) in PRESETS {
+        say!("{name:<14} {what}");
+        say!("{:<14} {}", "", scheme_options(&scheme, Physics::IDEAL_GAS));
+    }
+}
+
+/// A scheme (and the case's softening and Courant factor) written as the
+/// `sphexa run` options that select it.
+fn scheme_options(s: &Scheme, physics: Physics) -> String {
+    let on = |b: bool| if b { "on" } else { "off" };
+    let gradients = s.gradients.name();
+    let mut text = format!(
+        "--gradients {gradients} --grad-h {} --alpha {} --av-switches {}",
+        on(s.grad_h),
+        s.alpha(),
+        on(s.switches().is_some())
+    );
+    if let Some(c) = s.conductivity {
+        text += &format!(" --conductivity {c}");
+    }
+    if let Some(e) = s.artificial_stress {
+        text += &format!(" --artificial-stress {e}");
+    }
+    if s.fixed_h {
+        text += " --smoothing-length fixed";
+    }
+    if s.volume != Volume::Mass {
+        text += &format!(" --volume {}", s.volume.name());
+    }
+    if s.av_cleaning {
+        text += " --av-cleaning on";
+    }
+    if s.av_form != AvForm::Paper {
+        text += &format!(" --av-form {}", s.av_form.name());
+    }
+    if let Some(soft) = physics.softening {
+        text += &format!(" --softening {soft} (self-gravity)");
+    }
+    if let Some(k) = physics.courant {
+        text += &format!(" --courant {k}");
+    }
+    text
+}

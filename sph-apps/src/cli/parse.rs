@@ -1,0 +1,218 @@
+//! The value parsers of the command line, shared by the subcommands: each
+//! refuses a bad value with what is allowed (clap adds the option and the
+//! value), so that no subcommand ever sees one.
+
+use crate::cases;
+use crate::output::snapshot as snapfile;
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+use sph_core::Choice;
+use sph_kernels::KernelChoice;
+
+/// Most worker threads per rank.
+const MAX_THREADS: i64 = 1 << 16;
+
+/// Smallest and largest particles per side.
+const SIDE_RANGE: (usize, usize) = (4, 1000);
+
+/// A `--checkpoint-every` value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum CheckpointSpec {
+    /// After every N-th step.
+    Steps(u64),
+    /// After the first step reaching each multiple of this simulated time.
+    Time(f64),
+    /// Every this many seconds of wall-clock time.
+    Wall(f64),
+    /// Young/Daly, with `--mtbf`.
+    Auto,
+}
+
+impl std::fmt::Display for CheckpointSpec {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CheckpointSpec::Steps(n) => write!(f, "{n}"),
+            CheckpointSpec::Time(t) => write!(f, "time:{t}"),
+            CheckpointSpec::Wall(s) => write!(f, "wall:{s}s"),
+            CheckpointSpec::Auto => f.write_str("auto"),
+        }
+    }
+}
+
+/// A `--checkpoint-every` value: `N`, `time:T`, `wall:DURATION` or `auto`.
+pub(crate) fn parse_checkpoint_every(s: &str) -> Result<CheckpointSpec, String> {
+    let s = s.trim();
+    let allowed = "allowed: N (steps, at least 1), time:T (positive simulated time), wall:DURATION (e.g. 90s, 10m, 2h), auto (with --mtbf)";
+    if s == "auto" {
+        return Ok(CheckpointSpec::Auto);
+    }
+    if let Some(t) = s.strip_prefix("time:") {
+        return parse_positive(t)
+            .map(CheckpointSpec::Time)
+            .map_err(|_| format!("'{t}' is not a positive time; {allowed}"));
+    }
+    if let Some(d) = s.strip_prefix("wall:") {
+        return parse_duration(d).map(CheckpointSpec::Wall);
+    }
+    parse_steps(s)
+        .map(CheckpointSpec::Steps)
+        .map_err(|_| allowed.to_owned())
+}
+
+/// A duration: a positive number with an optional unit s, m, h or d.
+pub(crate) fn parse_duration(s: &str) -> Result<f64, String> {
+    let s = s.trim();
+    let (num, scale) = match s.char_indices().last() {
+        Some((i, 's')) => (&s[..i], 1.0),
+        Some((i, 'm')) => (&s[..i], 60.0),
+        Some((i, 'h')) => (&s[..i], 3600.0),
+        Some((i, 'd')) => (&s[..i], 86400.0),
+        _ => (s, 1.0),
+    };
+    match num.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(x * scale),
+        _ => Err("a duration is a positive number with an optional unit s, m, h or d (e.g. 90s, 10m, 6h, 2d)".into()),
+    }
+}
+
+/// A `--snapshot-fields` list.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct FieldList(pub(crate) Vec<String>);
+
+/// The long help of `--snapshot-fields`, its field list from the field
+/// table.
+pub(crate) fn snapshot_fields_help() -> String {
+    format!(
+        "Fields of the snapshots, comma-separated (default: {}). Snapshots are written when a \
+         --snapshot-every-steps, --snapshot-every-time or --snapshot-at schedule is given, as \
+         OUT/snapshots/snapshot_SSSSSSSS.h5 (HDF5, H5Part layout: h5py, ParaView and SPH-EXA's \
+         scripts read them). Fields: {}; and, where the scheme has them: {}.",
+        snapfile::DEFAULT_FIELDS.join(","),
+        snapfile::base_fields().join(","),
+        snapfile::optional_fields().join(",")
+    )
+}
+
+/// A `--snapshot-fields` value: names of the field table.
+pub(crate) fn parse_field_list(s: &str) -> Result<FieldList, String> {
+    snapfile::parse_fields(s).map(FieldList)
+}
+
+/// A `--snapshot-at` list.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Times(pub(crate) Vec<f64>);
+
+/// Times >= 0, separated by commas.
+pub(crate) fn parse_times(s: &str) -> Result<Times, String> {
+    s.split(',')
+        .map(|t| {
+            parse_number(t, |x| x >= 0.0, "").map_err(|_| {
+                format!(
+                    "'{}' is not a time >= 0; give times separated by commas",
+                    t.trim()
+                )
+            })
+        })
+        .collect::<Result<Vec<f64>, String>>()
+        .map(Times)
+}
+
+/// How many checkpoints to keep: a whole number >= 0.
+pub(crate) fn parse_keep(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<i64>() {
+        Ok(n) if n >= 0 => Ok(n as usize),
+        _ => Err(
+            "the number of checkpoints to keep must be a whole number >= 0 (0 keeps all)".into(),
+        ),
+    }
+}
+
+/// The values of a scheme option declared in `sph-core` ([`Choice`]: its
+/// names, each with its one-line help for `--help`), so the command line
+/// and `config.toml` take them from the one list beside the option's enum.
+pub(crate) fn choice<T: Choice>() -> impl TypedValueParser<Value = T> {
+    let values = T::ALL
+        .iter()
+        .map(|v| PossibleValue::new(v.name()).help(v.help()));
+    // The names parser refuses anything not listed, so the lookup finds it.
+    PossibleValuesParser::new(values).map(|name| T::from_name(&name).expect("a listed name"))
+}
+
+/// The registered cases as the allowed values of the case argument (with
+/// their descriptions in `sphexa run --help`).
+pub(crate) fn case_names() -> PossibleValuesParser {
+    PossibleValuesParser::new(
+        cases::registry()
+            .iter()
+            .map(|c| PossibleValue::new(c.name()).help(c.description())),
+    )
+}
+
+/// Particles per side, within [`SIDE_RANGE`].
+pub(crate) fn parse_side(s: &str) -> Result<usize, String> {
+    let (lo, hi) = SIDE_RANGE;
+    match s.trim().parse::<i64>() {
+        Ok(n) if (lo as i64..=hi as i64).contains(&n) => Ok(n as usize),
+        _ => Err(format!(
+            "particles per side must be a whole number from {lo} to {hi}"
+        )),
+    }
+}
+
+/// A step count (or repeat count): at least 1.
+pub(crate) fn parse_steps(s: &str) -> Result<u64, String> {
+    match s.trim().parse::<i64>() {
+        Ok(n) if n >= 1 => Ok(n as u64),
+        _ => Err("the number of steps must be a whole number, at least 1".into()),
+    }
+}
+
+/// A thread (or rank) count: 1 to [`MAX_THREADS`].
+pub(crate) fn parse_threads(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<i64>() {
+        Ok(n) if (1..=MAX_THREADS).contains(&n) => Ok(n as usize),
+        _ => Err(format!(
+            "the thread count must be a whole number, at least 1 (at most {MAX_THREADS})"
+        )),
+    }
+}
+
+/// A neighbour count: at least 1 (the run checks the order of the two).
+pub(crate) fn parse_count(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<i64>() {
+        Ok(n) if n >= 1 => Ok(n as usize),
+        _ => Err("a neighbour count must be a whole number, at least 1".into()),
+    }
+}
+
+/// A finite number within `ok`, or `allowed` as the error.
+fn parse_number(s: &str, ok: impl Fn(f64) -> bool, allowed: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && ok(x) => Ok(x),
+        _ => Err(allowed.into()),
+    }
+}
+
+/// A positive finite number.
+pub(crate) fn parse_positive(s: &str) -> Result<f64, String> {
+    parse_number(s, |x| x > 0.0, "a positive finite number is required")
+}
+
+/// A finite number >= 0.
+pub(crate) fn parse_non_negative(s: &str) -> Result<f64, String> {
+    parse_number(s, |x| x >= 0.0, "a finite number >= 0 is required")
+}
+
+/// A Courant factor, in (0, 1].
+pub(crate) fn parse_courant(s: &str) -> Result<f64, String> {
+    parse_number(
+        s,
+        |x| x > 0.0 && x <= 1.0,
+        "the Courant factor must be a number in (0, 1]",
+    )
+}
+
+/// A kernel name (`sinc:6`, `m4`, ...).
+pub(crate) fn parse_kernel(s: &str) -> Result<KernelChoice, String> {
+    s.parse()
+        .map_err(|e: sph_kernels::KernelError| e.to_string())
+}

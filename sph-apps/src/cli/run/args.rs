@@ -1,0 +1,287 @@
+//! The options of `sphexa run` (each documented as its `--help` line) and
+//! the value types of its options that are not `sph-core`'s (those take
+//! their values from [`sph_core::Choice`]).
+
+use crate::cli::parse::{
+    case_names, choice, parse_checkpoint_every, parse_count, parse_courant, parse_duration,
+    parse_field_list, parse_keep, parse_kernel, parse_non_negative, parse_positive, parse_side,
+    parse_steps, parse_threads, parse_times, snapshot_fields_help, CheckpointSpec, FieldList,
+    Times,
+};
+use clap::{Args, Parser, ValueEnum};
+use sph_core::timestep::FirstStep;
+use sph_core::{AvForm, Gradients, Volume};
+use sph_kernels::KernelChoice;
+use std::path::PathBuf;
+
+/// `--smoothing-length`: adaptive or fixed h.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq)]
+pub(crate) enum SmoothingArg {
+    /// Follows the neighbour count every step.
+    Adaptive,
+    /// Stays as set up.
+    Fixed,
+}
+
+/// An on/off option (`--grad-h`, `--av-switches`, `--av-cleaning`).
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Switch {
+    /// Enabled.
+    On,
+    /// Disabled.
+    Off,
+}
+
+/// `--curve`: the space-filling curve.
+#[derive(ValueEnum, Clone, Copy, Debug)]
+pub(crate) enum CurveArg {
+    /// Hilbert curve.
+    Hilbert,
+    /// Morton (Z-order) curve.
+    Morton,
+}
+
+/// The default of --max-momentum-drift.
+pub(crate) const DEFAULT_MOMENTUM_BOUND: f64 = 1e-10;
+
+/// The options of `sphexa run`; their long names are also the keys of
+/// `--config` files and of the resolved `config.toml`.
+#[derive(Args, Debug)]
+pub(crate) struct RunArgs {
+    /// Test case (`sphexa cases` lists each with its defaults). Required
+    /// unless --config or --restart names it.
+    #[arg(value_parser = case_names())]
+    pub(crate) case: Option<String>,
+    /// Particles per side of the initial lattice, 4 to 1000 (default: the
+    /// case's, see `sphexa cases`).
+    #[arg(short = 'n', long = "side", value_name = "N", allow_negative_numbers = true,
+          value_parser = parse_side)]
+    pub(crate) side: Option<usize>,
+    /// Number of steps to run, at least 1 (default: run to the end time).
+    #[arg(long, conflicts_with = "end_time", allow_negative_numbers = true,
+          value_parser = parse_steps)]
+    pub(crate) steps: Option<u64>,
+    /// Simulated time to reach, a positive number (default: the case's, see
+    /// `sphexa cases`).
+    #[arg(long = "end-time", value_name = "T", allow_negative_numbers = true,
+          value_parser = parse_positive)]
+    pub(crate) end_time: Option<f64>,
+    /// Output folder, created if needed (default: out/CASE).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: Option<PathBuf>,
+    /// Worker threads per rank, at least 1 (default: all cores).
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = parse_threads)]
+    pub(crate) threads: Option<usize>,
+    /// Kernel: `sinc` (= sinc:6), `sinc:N` (1 <= N <= 1000), `m4`, `wendland-c2`,
+    /// `wendland-c4`, `wendland-c6`.
+    #[arg(long, default_value = "sinc:6", value_parser = parse_kernel)]
+    pub(crate) kernel: KernelChoice,
+    /// Cubic lattices even where the case starts from glass (sod,
+    /// wind-shock). Glass
+    /// blocks are relaxed with the run's kernel and neighbour counts on
+    /// first use and cached in $SPHEXA_GLASS_DIR, else
+    /// $XDG_CACHE_HOME/sphexa/glass, else ~/.cache/sphexa/glass (see
+    /// `sphexa glass`).
+    #[arg(long)]
+    pub(crate) lattice: bool,
+    /// Target neighbour count, self included: 8 to --ngmax.
+    #[arg(long, default_value_t = 100, allow_negative_numbers = true,
+          value_parser = parse_count)]
+    pub(crate) ng0: usize,
+    /// Largest accepted neighbour count before h is iterated: --ng0 or more.
+    #[arg(long, default_value_t = 150, allow_negative_numbers = true,
+          value_parser = parse_count)]
+    pub(crate) ngmax: usize,
+    /// Scheme preset to start from instead of the case's own: `paper`
+    /// (the seed paper's eqs. 1-5: IAD, grad-h, constant alpha = 1), `std`
+    /// (SPH-EXA's std: as paper without grad-h), `ve` (SPH-EXA's default:
+    /// volume elements, grad-h, IAD, its switches), `ve-ac` (ve without
+    /// grad-h, with conductivity 1), `best` (ve-ac with the paper's
+    /// viscosity and switches up to alpha 0.5: the lowest Sedov error per
+    /// second), `shear` (the paper's with switches and
+    /// AV cleaning), `contact` (pressure-energy volumes,
+    /// kernel gradients, grad-h, alpha = 1), `noh` (kernel gradients, grad-h,
+    /// switches up to alpha 0.7), `evrard` (kernel gradients, no grad-h,
+    /// switches up to alpha 0.5, conductivity 3); `sphexa cases` lists them. The options
+    /// below override it one by one.
+    #[arg(long, value_name = "NAME")]
+    pub(crate) scheme: Option<String>,
+    /// Gradient operator (default: the case's, see `sphexa cases`).
+    #[arg(long, value_parser = choice::<Gradients>())]
+    pub(crate) gradients: Option<Gradients>,
+    /// Space-filling curve for sorting particles.
+    #[arg(long, value_enum, default_value = "hilbert")]
+    pub(crate) curve: CurveArg,
+    /// Artificial viscosity strength alpha, the maximum with switches; a
+    /// number >= 0 (default: the case's, see `sphexa cases`).
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_non_negative)]
+    pub(crate) alpha: Option<f64>,
+    /// Courant factor, in (0, 1] (default: the case's, see `sphexa cases`:
+    /// 0.2, evrard 0.5).
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_courant)]
+    pub(crate) courant: Option<f64>,
+    /// The first time step (default: ramp). `criteria` skips the ramp
+    /// from the case's first dt: Sedov (dt0 = 1e-6, as SPH-EXA) then
+    /// starts at the Courant step of its hot centre, with about 60 steps
+    /// fewer to t = 0.05.
+    #[arg(long, value_parser = choice::<FirstStep>())]
+    pub(crate) first_step: Option<FirstStep>,
+    /// The grad-h correction Omega (default: the case's, see `sphexa cases`).
+    #[arg(long, value_enum)]
+    pub(crate) grad_h: Option<Switch>,
+    /// Leave out the grad-h correction (Omega = 1): `--grad-h off`.
+    #[arg(long, conflicts_with = "grad_h")]
+    pub(crate) no_grad_h: bool,
+    /// Time-dependent viscosity switches: each particle's alpha rises to
+    /// --alpha in shocks and decays to 0.05 elsewhere (SPH-EXA's "ve"
+    /// switches). Default: the case's, see `sphexa cases`.
+    #[arg(long, value_enum)]
+    pub(crate) av_switches: Option<Switch>,
+    /// Artificial conductivity of internal energy alpha_u, a number >= 0
+    /// (0 = off; ~1 smooths wall heating at shocks and walls). Default: the
+    /// scheme's (1 in `ve-ac`, 3 in `evrard`, off in the other presets).
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_non_negative)]
+    pub(crate) conductivity: Option<f64>,
+    /// Artificial stress epsilon against the tensile instability (Monaghan
+    /// 2000): a repulsion between particles under negative pressure that
+    /// close in below the lattice spacing; a number >= 0 (0 = off; 0.2 is
+    /// Monaghan's value). Default: the case's (square-patch: 0.2; off
+    /// elsewhere).
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_non_negative)]
+    pub(crate) artificial_stress: Option<f64>,
+    /// Smoothing lengths: `adaptive` follows the neighbour count every
+    /// step; `fixed` keeps each particle's h as set up (weakly compressible
+    /// flows with a free surface). Default: the case's (square-patch:
+    /// fixed; adaptive elsewhere).
+    #[arg(long, value_enum)]
+    pub(crate) smoothing_length: Option<SmoothingArg>,
+    /// Particle volumes (default: the case's, see `sphexa cases`).
+    #[arg(long, value_parser = choice::<Volume>())]
+    pub(crate) volume: Option<Volume>,
+    /// AV cleaning after SPH-EXA's: the viscosity of an approaching pair acts
+    /// on the velocity jump left after a limited linear reconstruction from
+    /// both sides, so shear layers and smooth flows keep their kinetic
+    /// energy while shocks keep their full viscosity. Default: the case's (kelvin-helmholtz:
+    /// see `sphexa cases`).
+    #[arg(long, value_enum)]
+    pub(crate) av_cleaning: Option<Switch>,
+    /// Form of the artificial viscosity and of the Courant signal velocity
+    /// that goes with it (default: the scheme's: `sph-exa` in `ve` and
+    /// `ve-ac`, `paper` in the other presets).
+    #[arg(long, value_parser = choice::<AvForm>())]
+    pub(crate) av_form: Option<AvForm>,
+    /// Self-gravity: opening angle theta of the tree, a positive number
+    /// (cases with gravity only).
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true,
+          value_parser = parse_positive)]
+    pub(crate) theta: f64,
+    /// Self-gravity: pairs are softened within SOFTENING * (h_i + h_j), a
+    /// number >= 0 (1 = SPH-EXA's choice; default: the case's, see
+    /// `sphexa cases`; cases with gravity only).
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_non_negative)]
+    pub(crate) softening: Option<f64>,
+    /// Also write the final state of every particle (particles.csv, sorted
+    /// by id, exact decimal round-trip of every value).
+    #[arg(long)]
+    pub(crate) write_particles: bool,
+    /// Every rank but 0 also writes its own stage timings
+    /// (timings.rankR.csv, the columns of timings.csv, which is rank 0's):
+    /// where a multi-rank run waits. A pair stage slower on one rank is
+    /// imbalance; the others' `halos` and `conserved` columns hold their
+    /// wait for it.
+    #[arg(long)]
+    pub(crate) rank_timings: bool,
+    /// No progress output.
+    #[arg(short, long)]
+    pub(crate) quiet: bool,
+    /// Stop with an error at the first conserved quantity past its bound
+    /// (--max-energy-drift, --max-momentum-drift, total mass exact, every
+    /// particle mass > 0), naming the quantity, the step and the particle
+    /// to blame. Without it the run warns once per quantity and records
+    /// the step in summary.json.
+    #[arg(long)]
+    pub(crate) strict: bool,
+    /// Bound of the relative total-energy drift |E - E0| / |E0| checked
+    /// after every step, a number >= 0.
+    #[arg(long, value_name = "X", default_value_t = 1e-2, allow_negative_numbers = true,
+          value_parser = parse_non_negative)]
+    pub(crate) max_energy_drift: f64,
+    /// Bound of the momentum drift |p - p0| relative to the momentum scale
+    /// (the largest sqrt(2 M (E_kin + |E_int|)) so far: M times the rms of
+    /// speed and thermal speed), a number >= 0. Left at its default 1e-10,
+    /// runs with self-gravity use 1e-4 (the tree's forces conserve momentum
+    /// only to its accuracy).
+    #[arg(long, value_name = "X", default_value_t = DEFAULT_MOMENTUM_BOUND, allow_negative_numbers = true,
+          value_parser = parse_non_negative)]
+    pub(crate) max_momentum_drift: f64,
+    /// Fields of the snapshots, comma-separated (default:
+    /// x,y,z,vx,vy,vz,h,m,u,rho,p,id). Snapshots are written when a
+    /// --snapshot-every-steps, --snapshot-every-time or --snapshot-at
+    /// schedule is given, as OUT/snapshots/snapshot_SSSSSSSS.h5 (HDF5,
+    /// H5Part layout: h5py, ParaView and SPH-EXA's scripts read them).
+    /// Fields: see the full help (--help).
+    #[arg(long, value_name = "LIST", value_parser = parse_field_list,
+          long_help = snapshot_fields_help())]
+    pub(crate) snapshot_fields: Option<FieldList>,
+    /// Write a snapshot after every N-th step (N >= 1).
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = parse_steps)]
+    pub(crate) snapshot_every_steps: Option<u64>,
+    /// Write a snapshot after the first step reaching each multiple of T
+    /// (simulated time, positive). Steps are never shortened for outputs.
+    #[arg(long, value_name = "T", allow_negative_numbers = true, value_parser = parse_positive)]
+    pub(crate) snapshot_every_time: Option<f64>,
+    /// Write a snapshot after the first step reaching each of these times
+    /// (comma-separated, each >= 0).
+    #[arg(long, value_name = "T1,T2,...", allow_negative_numbers = true, value_parser = parse_times)]
+    pub(crate) snapshot_at: Option<Times>,
+    /// Write checkpoints (every field a restart needs, full precision) as
+    /// OUT/checkpoints/checkpoint_SSSSSSSS.h5: `N` after every N-th step;
+    /// `time:T` after the first step reaching each multiple of simulated
+    /// time T; `wall:DURATION` every DURATION of wall-clock time (`90s`,
+    /// `10m`, `2h`, `1d`; a plain number is seconds); `auto` every
+    /// sqrt(2 C M) of wall-clock time (Young/Daly), with C the measured time
+    /// of the last checkpoint (the first is written after step 1) and M
+    /// from --mtbf.
+    #[arg(long, value_name = "SPEC", value_parser = parse_checkpoint_every)]
+    pub(crate) checkpoint_every: Option<CheckpointSpec>,
+    /// Mean time between failures of the machine, for `--checkpoint-every
+    /// auto`: a DURATION (`6h`, `30m`, `2d`, or seconds).
+    #[arg(long, value_name = "DURATION", value_parser = parse_duration)]
+    pub(crate) mtbf: Option<f64>,
+    /// Checkpoints of this run to keep: older ones are deleted once a newer
+    /// one is complete (0 keeps all).
+    #[arg(long, value_name = "K", default_value_t = 2, allow_negative_numbers = true,
+          value_parser = parse_keep)]
+    pub(crate) checkpoint_keep: usize,
+    /// Continue the run of checkpoint FILE (its step STEP, default the
+    /// last step group): the checkpoint's configuration applies, options
+    /// given here override it (a changed physics option makes the
+    /// continuation differ from the run that wrote it). --steps and
+    /// --end-time count from the run's start, not from the checkpoint.
+    /// conserved.csv in --out keeps its lines up to the checkpoint;
+    /// timings.csv and summary.json cover the continued part.
+    #[arg(long, value_name = "FILE[:STEP]", conflicts_with = "init")]
+    pub(crate) restart: Option<String>,
+    /// Start the case from the particles of snapshot FILE (Step#K, default
+    /// the last): ours, or an H5Part file of SPH-EXA (group Step#K with 1-D
+    /// datasets x, y, z, h, m, u and optionally vx, vy, vz, id, any float
+    /// or integer type; the box from attribute `box` if present). Time
+    /// starts at 0; the case supplies the scheme and the reference.
+    #[arg(long, value_name = "FILE[:K]")]
+    pub(crate) init: Option<String>,
+    /// Read options from a TOML file: one key per option, named as the
+    /// option without its dashes (`side = 20`, `end-time = 0.05`,
+    /// `av-switches = "on"`, `snapshot-at = [0.01, 0.02]`, `case =
+    /// "sedov"`); options on the command line override it. Every run writes
+    /// its resolved configuration as OUT/config.toml, which repeats it.
+    #[arg(long, value_name = "FILE")]
+    pub(crate) config: Option<PathBuf>,
+}
+
+/// `sphexa run` options alone (to parse a configuration's options).
+#[derive(Parser, Debug)]
+#[command(name = "sphexa run", no_binary_name = true)]
+pub(crate) struct RunOnly {
+    #[command(flatten)]
+    pub(crate) args: RunArgs,
+}

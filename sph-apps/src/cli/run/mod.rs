@@ -1,0 +1,290 @@
+//! `sphexa run`: the run's options (layered with `--config` and
+//! `--restart`), its case, scheme and initial particles, then the
+//! [`Simulation`] and its summary on the terminal.
+
+pub(crate) mod args;
+mod layers;
+mod resolved;
+mod scheme;
+
+use crate::cli::parse::CheckpointSpec;
+use crate::cli::start_threads;
+use crate::output::snapshot::{self as snapfile, Schedule};
+use crate::simulation::{CheckpointEvery, Outputs, Progress, Stop};
+use crate::watch::{Bounds, Watch, GRAVITY_MOMENTUM_BOUND};
+use crate::{cases, checkpoint, AppError, Simulation};
+use args::{CurveArg, RunArgs, DEFAULT_MOMENTUM_BOUND};
+use clap::ArgMatches;
+use sph_comm::Communicator;
+use sph_core::HydroConfig;
+use sph_kernels::FastKernel;
+use sph_tree::Curve;
+use std::path::PathBuf;
+
+/// `sphexa run`: the options `a` (as parsed into `m`) over the layers of
+/// `--config` and `--restart`, then the run.
+pub(crate) fn run(a: RunArgs, m: &ArgMatches) -> Result<(), AppError> {
+    layers::layered(a, m).and_then(execute)
+}
+
+/// The snapshot and checkpoint outputs the options ask for; `config` is
+/// the resolved configuration (stored in every file), `t0` the start time.
+fn outputs(a: &RunArgs, config: String, t0: f64) -> Result<Outputs, AppError> {
+    let schedule = Schedule::new(
+        a.snapshot_every_steps,
+        a.snapshot_every_time,
+        a.snapshot_at.clone().map(|t| t.0).unwrap_or_default(),
+        t0,
+    );
+    if a.snapshot_fields.is_some() && !schedule.is_active() {
+        return Err(AppError::Usage(
+            "--snapshot-fields needs a schedule: --snapshot-every-steps N, --snapshot-every-time T or --snapshot-at T1,T2,...".into(),
+        ));
+    }
+    let snapshots = schedule.is_active().then(|| {
+        let fields = a.snapshot_fields.clone().map(|f| f.0).unwrap_or_else(|| {
+            snapfile::DEFAULT_FIELDS
+                .iter()
+                .map(|s| (*s).to_owned())
+                .collect()
+        });
+        (fields, schedule)
+    });
+    let every = match (a.checkpoint_every, a.mtbf) {
+        (None, None) => None,
+        (None, Some(_)) => {
+            return Err(AppError::Usage("--mtbf is used by --checkpoint-every auto; give both".into()))
+        }
+        (Some(CheckpointSpec::Auto), None) => {
+            return Err(AppError::Usage(
+                "--checkpoint-every auto needs --mtbf DURATION (the machine's mean time between failures, e.g. 6h)".into(),
+            ))
+        }
+        (Some(CheckpointSpec::Auto), Some(m)) => Some(CheckpointEvery::Auto { mtbf_s: m }),
+        (Some(_), Some(_)) => {
+            return Err(AppError::Usage("--mtbf applies only to --checkpoint-every auto".into()))
+        }
+        (Some(CheckpointSpec::Steps(n)), None) => Some(CheckpointEvery::Steps(n)),
+        (Some(CheckpointSpec::Time(t)), None) => Some(CheckpointEvery::Time(t)),
+        (Some(CheckpointSpec::Wall(w)), None) => Some(CheckpointEvery::Wall(w)),
+    };
+    Ok(Outputs {
+        snapshots,
+        checkpoints: every.map(|e| (e, a.checkpoint_keep)),
+        attrs: vec![("config".into(), sph_io::Attr::Str(config))],
+    })
+}
+
+/// The rank count an MPI launcher announces to the processes it starts
+/// (Open MPI; MPICH and others through PMI), if any.
+#[cfg(not(feature = "mpi"))]
+fn launched_ranks() -> Option<usize> {
+    ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE"]
+        .iter()
+        .find_map(|k| std::env::var(k).ok()?.trim().parse().ok())
+}
+
+/// Runs the case of the resolved options `a`.
+fn execute(a: RunArgs) -> Result<(), AppError> {
+    let Some(case_name) = a.case.clone() else {
+        return Err(AppError::Usage(format!(
+            "no case given: name one ({}), or give --config FILE or --restart FILE",
+            cases::names().join(", ")
+        )));
+    };
+    let case = cases::lookup(&case_name)?;
+    let side = a.side.unwrap_or(case.default_side());
+    if a.ng0 < 8 || a.ng0 > a.ngmax {
+        return Err(AppError::Usage(format!(
+            "--ng0 {} must be at least 8 and at most --ngmax {}",
+            a.ng0, a.ngmax
+        )));
+    }
+    // Output options are checked before any folder is made.
+    outputs(&a, String::new(), f64::NEG_INFINITY)?;
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out").join(case.name()));
+    // Before any work: a folder that cannot be made is a usage error.
+    std::fs::create_dir_all(&out).map_err(|e| {
+        AppError::Usage(format!(
+            "--out {}: cannot create this folder ({e}); give a folder that can be created and written",
+            out.display()
+        ))
+    })?;
+    start_threads(a.threads)?;
+    let kernel_choice = a.kernel;
+    let kernel: FastKernel = kernel_choice.fast()?;
+
+    let mut config = HydroConfig::default();
+    config.curve = match a.curve {
+        CurveArg::Hilbert => Curve::Hilbert,
+        CurveArg::Morton => Curve::Morton,
+    };
+    // Kept only by cases with self-gravity.
+    config.gravity = Some(sph_gravity::GravityParams {
+        theta: a.theta,
+        ..Default::default()
+    });
+    config.neighbors.ng0 = a.ng0;
+    config.neighbors.ngmax = a.ngmax;
+    let stop = match (a.steps, a.end_time) {
+        (Some(s), _) => Stop::Steps(s),
+        (None, Some(t)) => Stop::Time(t),
+        (None, None) => Stop::Time(case.default_end_time()),
+    };
+    #[cfg(not(feature = "mpi"))]
+    if let Some(n) = launched_ranks().filter(|&n| n > 1) {
+        return Err(AppError::Usage(format!(
+            "started as one of {n} MPI ranks, but this sphexa was built without MPI: every rank \
+             would run the whole problem into the same files; build it with \
+             `cargo build --release -p sph-apps --features mpi`, or run it without mpirun"
+        )));
+    }
+    #[cfg(feature = "mpi")]
+    let comm = sph_comm::MpiComm::init()?;
+    #[cfg(not(feature = "mpi"))]
+    let comm = sph_comm::SerialComm::new();
+    let (rank, ranks) = (comm.rank(), comm.size());
+    let root = rank == 0;
+    // The case applies its own scheme with what the command line
+    // overrides; each rank builds only its share of the particles.
+    let share = cases::Share { rank, ranks };
+    let overrides = scheme::scheme_overrides(&a)?;
+    scheme::check_scheme(&overrides.over(case.default_scheme()), &a, case.name())?;
+    let layout = if a.lattice {
+        cases::Layout::Lattice
+    } else {
+        cases::Layout::Glass {
+            kernel: a.kernel,
+            dir: crate::glass::default_cache_dir(),
+        }
+    };
+    let mut scene = case.setup_share(side, config, &overrides, share, &layout)?;
+    scene.config.scheme.validate()?;
+    // A checkpoint, or a snapshot as initial conditions, replaces the
+    // case's particles (each rank reads only its share).
+    let loaded = match &a.restart {
+        Some(spec) => Some(checkpoint::load(&comm, spec)?),
+        None => None,
+    };
+    if let Some(l) = &loaded {
+        if l.case.as_deref().is_some_and(|c| c != case.name()) {
+            return Err(AppError::Usage(format!(
+                "--restart {}: the checkpoint is of case '{}', not '{}'",
+                l.path.display(),
+                l.case.as_deref().unwrap_or(""),
+                case.name()
+            )));
+        }
+        scene.particles = checkpoint::particles(&l.rows, scene.config.fields(), &l.path)?;
+        scene.total = l.total;
+        scene.bbox = l.bbox;
+    } else if let Some(spec) = &a.init {
+        let (p, total, bbox) =
+            crate::init::load(&comm, spec, scene.config.fields(), scene.bbox.boundary())?;
+        scene.particles = p;
+        scene.total = total;
+        if let Some(b) = bbox {
+            scene.bbox = b;
+        }
+    }
+    let resolved = resolved::resolved_config(&a, case.name(), side, stop, &out, &scene.config);
+    let config_text = toml::to_string(&resolved).expect("a TOML table serialises");
+    if root {
+        let path = out.join("config.toml");
+        std::fs::write(&path, &config_text).map_err(|e| AppError::io(&path, e))?;
+    }
+    let outputs = outputs(
+        &a,
+        config_text,
+        loaded.as_ref().map_or(f64::NEG_INFINITY, |l| l.state.t),
+    )?;
+    let gravity = scene.config.gravity.is_some();
+    let n = scene.total;
+    if !a.quiet && root {
+        eprintln!(
+            "sphexa: {} with {n} particles, kernel {kernel_choice}, {ranks} rank(s) x {} threads, output in {}",
+            case.name(),
+            rayon::current_num_threads(),
+            out.display()
+        );
+    }
+    let progress = if a.quiet {
+        Progress::Quiet
+    } else {
+        Progress::Auto
+    };
+    let sim = match &loaded {
+        Some(l) => Simulation::resume(scene, kernel, kernel_choice.to_string(), comm, l.state),
+        None => Simulation::with_comm(scene, kernel, kernel_choice.to_string(), comm),
+    };
+    let result = sim.and_then(|mut sim| {
+        sim.set_write_particles(a.write_particles);
+        sim.set_rank_timings(a.rank_timings);
+        sim.set_after_step(Some(crate::memory::return_free_heap_to_os));
+        // Self-gravity's default momentum bound is the tree's accuracy.
+        let momentum = if a.max_momentum_drift == DEFAULT_MOMENTUM_BOUND && gravity {
+            GRAVITY_MOMENTUM_BOUND
+        } else {
+            a.max_momentum_drift
+        };
+        sim.set_watch(Some(Watch::new(
+            Bounds {
+                energy: a.max_energy_drift,
+                momentum,
+            },
+            a.strict,
+        )));
+        sim.set_outputs(outputs)?;
+        sim.run(stop, &out, progress)
+    });
+    let s = match result {
+        Ok(s) => s,
+        Err(e) if ranks > 1 => {
+            // The other ranks may wait in a collective: leave without
+            // finalising MPI, so that mpirun ends the job with this message.
+            eprintln!("error on rank {rank} of {ranks}: {e}");
+            std::process::exit(1);
+        }
+        Err(e) => return Err(e),
+    };
+    if !root {
+        return Ok(());
+    }
+    say!(
+        "{}: {} particles, {} steps to t = {:.4}, {:.1} s wall, {:.3e} particle-steps/s, peak RSS {:.0} MB",
+        s.case,
+        s.particles,
+        s.steps,
+        s.t_end,
+        s.wall_s,
+        s.particle_steps_per_s,
+        s.peak_rss_bytes as f64 / 1e6
+    );
+    if let Some(l1) = s.l1 {
+        say!("L1: rho {:.4e}  p {:.4e}  |v| {:.4e}", l1.rho, l1.p, l1.v);
+    }
+    if let (Some(r), Some(rr)) = (s.shock_radius, s.shock_radius_ref) {
+        say!(
+            "shock radius {r:.4} (reference {rr:.4}), peak density {:.3}",
+            s.peak_density
+        );
+    }
+    say!(
+        "energy drift {:.3e}, momentum drift {:.3e}, angular momentum drift {:.3e}",
+        s.energy_rel_drift,
+        s.momentum_rel_drift,
+        s.angular_momentum_rel_drift
+    );
+    if ranks > 1 {
+        let d = s.domain;
+        say!(
+            "domain: {ranks} ranks, {}..{} particles per rank, halo ratio {:.3} (max {:.3}), {:.3e} bytes sent/step, sync {:.3e} s/step, communication {:.3e} s/step",
+            d.owned_min, d.owned_max, d.halo_ratio_mean, d.halo_ratio_max,
+            d.bytes_sent_per_step, d.sync_seconds_per_step, d.comm_seconds_per_step
+        );
+    }
+    Ok(())
+}

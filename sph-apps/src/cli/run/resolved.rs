@@ -1,0 +1,123 @@
+//! The resolved configuration of a run (`OUT/config.toml`, and the
+//! `config` attribute of its snapshots and checkpoints): every option with
+//! the value it ran with.
+
+use super::args::{CurveArg, RunArgs, DEFAULT_MOMENTUM_BOUND};
+use crate::simulation::Stop;
+use sph_core::{Choice, HydroConfig};
+use std::path::Path;
+
+/// The fully resolved configuration of a run: every option with the value
+/// it ran with (scheme options as the case and the overrides made them), so
+/// `sphexa run --config OUT/config.toml` repeats the run.
+pub(crate) fn resolved_config(
+    a: &RunArgs,
+    case: &str,
+    side: usize,
+    stop: Stop,
+    out: &Path,
+    config: &HydroConfig,
+) -> toml::Table {
+    use toml::Value;
+    let mut t = toml::Table::new();
+    let mut set = |k: &str, v: Value| {
+        t.insert(k.to_owned(), v);
+    };
+    let on = |b: bool| Value::String(if b { "on" } else { "off" }.into());
+    set("case", Value::String(case.into()));
+    set("side", Value::Integer(side as i64));
+    match stop {
+        Stop::Steps(n) => set("steps", Value::Integer(n as i64)),
+        Stop::Time(te) => set("end-time", Value::Float(te)),
+    }
+    set("out", Value::String(out.display().to_string()));
+    if let Some(n) = a.threads {
+        set("threads", Value::Integer(n as i64));
+    }
+    set("kernel", Value::String(a.kernel.to_string()));
+    if a.lattice {
+        set("lattice", Value::Boolean(true));
+    }
+    set("ng0", Value::Integer(a.ng0 as i64));
+    set("ngmax", Value::Integer(a.ngmax as i64));
+    if let Some(s) = &a.scheme {
+        set("scheme", Value::String(s.clone()));
+    }
+    let s = &config.scheme;
+    set("gradients", Value::String(s.gradients.name().into()));
+    set(
+        "curve",
+        Value::String(match a.curve {
+            CurveArg::Hilbert => "hilbert".into(),
+            CurveArg::Morton => "morton".into(),
+        }),
+    );
+    set("alpha", Value::Float(s.alpha()));
+    set("courant", Value::Float(config.timestep.k_courant));
+    set(
+        "first-step",
+        Value::String(config.timestep.first_step.name().into()),
+    );
+    set("grad-h", on(s.grad_h));
+    set("av-switches", on(s.switches().is_some()));
+    set("conductivity", Value::Float(s.conductivity.unwrap_or(0.0)));
+    set(
+        "artificial-stress",
+        Value::Float(s.artificial_stress.unwrap_or(0.0)),
+    );
+    set(
+        "smoothing-length",
+        Value::String(if s.fixed_h { "fixed" } else { "adaptive" }.into()),
+    );
+    set("volume", Value::String(s.volume.name().into()));
+    set("av-cleaning", on(s.av_cleaning));
+    set("av-form", Value::String(s.av_form.name().into()));
+    set("theta", Value::Float(a.theta));
+    if let Some(g) = config.gravity {
+        set("softening", Value::Float(g.softening));
+    }
+    set("write-particles", Value::Boolean(a.write_particles));
+    set("quiet", Value::Boolean(a.quiet));
+    // The watch's options only when set: plain runs keep their config.toml.
+    if a.strict {
+        set("strict", Value::Boolean(true));
+    }
+    if a.rank_timings {
+        set("rank-timings", Value::Boolean(true));
+    }
+    if a.max_energy_drift != 1e-2 {
+        set("max-energy-drift", Value::Float(a.max_energy_drift));
+    }
+    if a.max_momentum_drift != DEFAULT_MOMENTUM_BOUND {
+        set("max-momentum-drift", Value::Float(a.max_momentum_drift));
+    }
+    if let Some(f) = &a.snapshot_fields {
+        set("snapshot-fields", Value::String(f.0.join(",")));
+    }
+    if let Some(n) = a.snapshot_every_steps {
+        set("snapshot-every-steps", Value::Integer(n as i64));
+    }
+    if let Some(x) = a.snapshot_every_time {
+        set("snapshot-every-time", Value::Float(x));
+    }
+    if let Some(at) = &a.snapshot_at {
+        set(
+            "snapshot-at",
+            Value::Array(at.0.iter().map(|&x| Value::Float(x)).collect()),
+        );
+    }
+    if let Some(c) = a.checkpoint_every {
+        set("checkpoint-every", Value::String(c.to_string()));
+    }
+    if let Some(m) = a.mtbf {
+        set("mtbf", Value::String(format!("{m}s")));
+    }
+    set("checkpoint-keep", Value::Integer(a.checkpoint_keep as i64));
+    if let Some(r) = &a.restart {
+        set("restart", Value::String(r.clone()));
+    }
+    if let Some(i) = &a.init {
+        set("init", Value::String(i.clone()));
+    }
+    t
+}
