@@ -2,10 +2,10 @@
 //! falls in under its own gravity, bounces and settles; compared with the
 //! energies of a 1-D Lagrangian reference.
 
-use super::{Layout, Listing, cube_lattice, field_set, initial_h, Case, EnergyPoint, InitialState, Physics, Scheme, Share};
+use super::{Request, Layout, Listing, cube_lattice, field_set, initial_h, Case, EnergyPoint, InitialState, Physics, Scheme};
 use crate::glass::{self, GlassSpec};
 use crate::AppError;
-use sph_core::{Eos, HydroConfig};
+use sph_core::Eos;
 use sph_tree::{Boundary, BoundingBox};
 
 /// Particles per side of the glass block tiled to fill the cube the
@@ -114,13 +114,8 @@ impl Case for EvrardCollapse {
     /// dispersion in the shocked core than a glass (E_kin at t = 1.0, 30^3,
     /// alpha 0.5 and conductivity 1: +18.4% of the reference on the
     /// lattice, +13.3% on the glass).
-    fn initial_state(
-        &self,
-        side: usize,
-        config: &HydroConfig,
-        share: Share,
-        layout: &Layout,
-    ) -> Result<InitialState, AppError> {
+    fn initial_state(&self, request: &Request<'_>) -> Result<InitialState, AppError> {
+        let Request { side, config, share, layout } = *request;
         let cell = 2.0 / side as f64;
         let inside = |q: &[f64; 3]| q[0] * q[0] + q[1] * q[1] + q[2] * q[2] < 1.0;
         let pts: Vec<[f64; 3]> = match layout {

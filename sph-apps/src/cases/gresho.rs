@@ -5,10 +5,9 @@
 //! spacings in z, all periodic, to t = 1. The error is `L1(v_phi)` for
 //! cylindrical radii up to 0.5.
 
-use super::{Layout, field_set, initial_h, Case, InitialState, Listing, Reference, Scheme, Share};
+use super::{Request, field_set, initial_h, Case, InitialState, Listing, Reference, Scheme};
 use crate::reference::Gresho;
 use crate::AppError;
-use sph_core::HydroConfig;
 use sph_tree::{Boundary, BoundingBox};
 
 /// The case (registered as `gresho`).
@@ -37,13 +36,8 @@ impl Case for GreshoVortex {
     }
 
     /// A `side x side x 8` lattice.
-    fn initial_state(
-        &self,
-        side: usize,
-        config: &HydroConfig,
-        share: Share,
-        _layout: &Layout,
-    ) -> Result<InitialState, AppError> {
+    fn initial_state(&self, request: &Request<'_>) -> Result<InitialState, AppError> {
+        let Request { side, config, share, .. } = *request;
         let vortex = Gresho::standard(GAMMA)?;
         let layers = LAYERS.max(1);
         let dx = 1.0 / side as f64;

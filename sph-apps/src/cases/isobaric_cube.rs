@@ -12,11 +12,10 @@
 //! the max norm, `max(|x|, |y|, |z|)`, so the profile shows the interface
 //! at 0.25 as a step.
 
-use super::{Layout, 
-    field_set, initial_h, Case, InitialState, Listing, Reference, Scheme, Share, Stationary,
+use super::{Request, 
+    field_set, initial_h, Case, InitialState, Listing, Reference, Scheme, Stationary,
 };
 use crate::AppError;
-use sph_core::HydroConfig;
 use sph_tree::{Boundary, BoundingBox};
 
 /// The case (registered as `isobaric-cube`).
@@ -54,13 +53,8 @@ impl Case for IsobaricCube {
 
     /// The thin lattice (spacing `1/side`) without the cells of the inner
     /// cube, then the dense lattice (spacing `1/(2 side)`) filling it.
-    fn initial_state(
-        &self,
-        side: usize,
-        config: &HydroConfig,
-        share: Share,
-        _layout: &Layout,
-    ) -> Result<InitialState, AppError> {
+    fn initial_state(&self, request: &Request<'_>) -> Result<InitialState, AppError> {
+        let Request { side, config, share, .. } = *request;
         if !side.is_multiple_of(2) {
             return Err(AppError::Usage(format!(
                 "case isobaric-cube: {side} particles per side; it must be even (the cube is half the box)"

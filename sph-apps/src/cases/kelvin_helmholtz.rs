@@ -10,11 +10,11 @@
 //! The particles sit on one cubic lattice with masses `rho(y) dx^3`, so the
 //! smoothed profile is resolved without stretching the lattice.
 
-use super::{Layout, 
-    field_set, initial_h, Case, Curve, InitialState, Listing, Scheme, Share,
+use super::{Request, 
+    field_set, initial_h, Case, Curve, InitialState, Listing, Scheme,
 };
 use crate::AppError;
-use sph_core::{HydroConfig, Particles};
+use sph_core::Particles;
 use sph_tree::{Boundary, BoundingBox};
 use std::f64::consts::PI;
 
@@ -105,13 +105,8 @@ impl Case for KelvinHelmholtz {
     }
 
     /// A `side x side x 8` lattice.
-    fn initial_state(
-        &self,
-        side: usize,
-        config: &HydroConfig,
-        share: Share,
-        _layout: &Layout,
-    ) -> Result<InitialState, AppError> {
+    fn initial_state(&self, request: &Request<'_>) -> Result<InitialState, AppError> {
+        let Request { side, config, share, .. } = *request;
         let dx = 1.0 / side as f64;
         let n = side * side * LAYERS;
         let h0 = initial_h(config.neighbors.ng0, dx * dx * dx, 1);
@@ -153,6 +148,7 @@ impl Case for KelvinHelmholtz {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use sph_core::HydroConfig;
 
     /// The profile's plateaus and the continuity of its pieces.
     #[test]

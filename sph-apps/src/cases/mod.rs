@@ -128,19 +128,13 @@ pub trait Case: Sync + std::fmt::Debug {
         Physics::IDEAL_GAS
     }
 
-    /// The initial particles, box and first time step for `side` particles
-    /// per side. `config` already carries the scheme (see [`Case::setup`]);
-    /// use [`field_set`] for the particle fields it needs.
-    /// Only the particles of `share` are built (global ids, in the case's
-    /// order): a distributed run never holds the whole initial state on
-    /// one rank.
-    fn initial_state(
-        &self,
-        side: usize,
-        config: &HydroConfig,
-        share: Share,
-        layout: &Layout,
-    ) -> Result<InitialState, AppError>;
+    /// The initial particles, box and first time step for the `request`'s
+    /// `side` particles per side. Its `config` already carries the scheme
+    /// (see [`Case::setup`]); use [`field_set`] for the particle fields it
+    /// needs. Only the particles of its `share` are built (global ids, in
+    /// the case's order): a distributed run never holds the whole initial
+    /// state on one rank.
+    fn initial_state(&self, request: &Request<'_>) -> Result<InitialState, AppError>;
 
     /// The analytic solution to compare `initial` with, if any.
     fn reference(
@@ -198,7 +192,13 @@ pub trait Case: Sync + std::fmt::Debug {
             )));
         }
         overrides.apply(self.default_scheme(), self.physics(), &mut config);
-        let initial = self.initial_state(side, &config, share, layout)?;
+        let request = Request {
+            side,
+            config: &config,
+            share,
+            layout,
+        };
+        let initial = self.initial_state(&request)?;
         let reference = self.reference(side, &initial)?;
         Ok(Scene {
             case: self.name(),
@@ -212,6 +212,19 @@ pub trait Case: Sync + std::fmt::Debug {
             curve: self.curve(),
         })
     }
+}
+
+/// What a case builds its initial state for ([`Case::initial_state`]).
+#[derive(Debug, Clone, Copy)]
+pub struct Request<'a> {
+    /// Particles per side of the initial lattice (or per unit length).
+    pub side: usize,
+    /// The run's configuration, the case's scheme already applied.
+    pub config: &'a HydroConfig,
+    /// The particles to build.
+    pub share: Share,
+    /// Lattice or glass.
+    pub layout: &'a Layout,
 }
 
 /// How a case places its particles.

@@ -1,10 +1,9 @@
 //! Noh implosion: a sphere of radius 0.5 cut from a lattice, uniform
 //! density, falling inwards at unit speed, open boundaries.
 
-use super::{Layout, Listing, cube_lattice, field_set, initial_h, Case, InitialState, Reference, Scheme, Share};
+use super::{Request, Listing, cube_lattice, field_set, initial_h, Case, InitialState, Reference, Scheme};
 use crate::reference::Noh;
 use crate::AppError;
-use sph_core::HydroConfig;
 use sph_tree::{Boundary, BoundingBox};
 
 /// The case (registered as `noh`).
@@ -47,13 +46,8 @@ impl Case for NohImplosion {
 
     /// A `side^3` lattice of the cube `[-0.5, 0.5]^3` cut to the sphere,
     /// unit total mass, unit inward speed.
-    fn initial_state(
-        &self,
-        side: usize,
-        config: &HydroConfig,
-        share: Share,
-        _layout: &Layout,
-    ) -> Result<InitialState, AppError> {
+    fn initial_state(&self, request: &Request<'_>) -> Result<InitialState, AppError> {
+        let Request { side, config, share, .. } = *request;
         let pts = sphere(side);
         let n = pts.len();
         let m = 1.0 / n as f64;

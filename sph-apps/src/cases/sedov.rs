@@ -4,10 +4,9 @@
 //! 1.1 per step from there (`--first-step criteria` starts at the Courant
 //! step of the hot centre instead: ~60 steps fewer, `docs/usage.md`).
 
-use super::{Layout, Listing, cube_lattice, field_set, initial_h, Case, InitialState, Reference, Scheme, Share};
+use super::{Request, Listing, cube_lattice, field_set, initial_h, Case, InitialState, Reference, Scheme};
 use crate::reference::Sedov;
 use crate::AppError;
-use sph_core::HydroConfig;
 use sph_tree::{Boundary, BoundingBox};
 
 /// The case (registered as `sedov`).
@@ -40,13 +39,8 @@ impl Case for SedovBlast {
 
 
     /// `side^3` particles.
-    fn initial_state(
-        &self,
-        side: usize,
-        config: &HydroConfig,
-        share: Share,
-        _layout: &Layout,
-    ) -> Result<InitialState, AppError> {
+    fn initial_state(&self, request: &Request<'_>) -> Result<InitialState, AppError> {
+        let Request { side, config, share, .. } = *request;
         let n = side * side * side;
         let (mut p, mine) = share.particles(n, field_set(config));
         let h0 = initial_h(config.neighbors.ng0, 1.0, n);

@@ -28,13 +28,12 @@
 //! 0.0130 / 0.0154 / 0.0321 and 0.0078 / 0.0100 / 0.0195, but put the shock
 //! 2.1% ahead at side 40.
 
-use super::{Layout, 
-    field_set, initial_h, Case, InitialState, Listing, Reference, Scheme, Share, Tube,
+use super::{Request, Layout, 
+    field_set, initial_h, Case, InitialState, Listing, Reference, Scheme, Tube,
 };
 use crate::glass::{self, GlassSpec};
 use crate::reference::{GasState, Riemann};
 use crate::AppError;
-use sph_core::HydroConfig;
 use sph_tree::{Boundary, BoundingBox};
 
 /// The case (registered as `sod`).
@@ -92,13 +91,8 @@ impl Case for SodTube {
     /// `side` dense particles along x, `cross^2` across
     /// ([`cross_section`]); the thin gas `side/2` along x (wrapping through
     /// `x = +-1`), `(cross/2)^2` across.
-    fn initial_state(
-        &self,
-        side: usize,
-        config: &HydroConfig,
-        share: Share,
-        layout: &Layout,
-    ) -> Result<InitialState, AppError> {
+    fn initial_state(&self, request: &Request<'_>) -> Result<InitialState, AppError> {
+        let Request { side, config, share, layout } = *request;
         if !side.is_multiple_of(2) {
             return Err(AppError::Usage(format!(
                 "case sod: {side} particles per unit length; it must be even (the thin gas has half as many)"

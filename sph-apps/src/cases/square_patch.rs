@@ -3,8 +3,8 @@
 //! particle's initial state, initial pressure from the incompressible
 //! Poisson series.
 
-use super::{
-    field_set, initial_h, Case, Curve, InitialState, Layout, Listing, Physics, Scheme, Share,
+use super::{Request, 
+    field_set, initial_h, Case, Curve, InitialState, Listing, Physics, Scheme, Share,
 };
 use crate::AppError;
 use sph_core::{Eos, HydroConfig};
@@ -131,13 +131,8 @@ impl Case for SquarePatch {
     }
 
     /// `side x side` particles per layer, `side` layers.
-    fn initial_state(
-        &self,
-        side: usize,
-        config: &HydroConfig,
-        share: Share,
-        _layout: &Layout,
-    ) -> Result<InitialState, AppError> {
+    fn initial_state(&self, request: &Request<'_>) -> Result<InitialState, AppError> {
+        let Request { side, config, share, .. } = *request;
         patch_state(side, side, config, share)
     }
 }

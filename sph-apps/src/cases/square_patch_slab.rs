@@ -4,9 +4,8 @@
 //! [`square-patch`](super::square_patch) otherwise.
 
 use super::square_patch::{angular_momentum_curve, patch_state, SquarePatch};
-use super::{Case, Curve, InitialState, Layout, Listing, Physics, Scheme, Share};
+use super::{Request, Case, Curve, InitialState, Listing, Physics, Scheme};
 use crate::AppError;
-use sph_core::HydroConfig;
 
 /// The case (registered as `square-patch-slab`).
 #[derive(Debug, Clone, Copy)]
@@ -38,13 +37,8 @@ impl Case for SquarePatchSlab {
     }
 
     /// `side x side` particles per layer, [`LAYERS`] layers.
-    fn initial_state(
-        &self,
-        side: usize,
-        config: &HydroConfig,
-        share: Share,
-        _layout: &Layout,
-    ) -> Result<InitialState, AppError> {
+    fn initial_state(&self, request: &Request<'_>) -> Result<InitialState, AppError> {
+        let Request { side, config, share, .. } = *request;
         patch_state(side, LAYERS, config, share)
     }
 
@@ -57,6 +51,7 @@ impl Case for SquarePatchSlab {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use sph_core::HydroConfig;
 
     /// The curve's `-L_z` of a slab `L` thick: the same for the thin slab
     /// and the cube of the same in-plane lattice, and within the lattice's

@@ -15,10 +15,10 @@
 //! so the wind has no seam across the periodic faces) or, with
 //! [`Layout::Lattice`], from cubic lattices.
 
-use super::{Layout, field_set, initial_h, Case, Curve, InitialState, Listing, Scheme, Share};
+use super::{Request, Layout, field_set, initial_h, Case, Curve, InitialState, Listing, Scheme};
 use crate::glass::{self, GlassSpec};
 use crate::AppError;
-use sph_core::{HydroConfig, Particles};
+use sph_core::Particles;
 use sph_tree::{Boundary, BoundingBox};
 
 /// The case (registered as `wind-shock`).
@@ -76,13 +76,8 @@ impl Case for WindShock {
         Scheme::VE
     }
 
-    fn initial_state(
-        &self,
-        side: usize,
-        config: &HydroConfig,
-        share: Share,
-        layout: &Layout,
-    ) -> Result<InitialState, AppError> {
+    fn initial_state(&self, request: &Request<'_>) -> Result<InitialState, AppError> {
+        let Request { side, config, share, layout } = *request;
         if !side.is_multiple_of(4) {
             return Err(AppError::Usage(format!(
                 "case wind-shock: {side} particles per unit length; it must be a multiple of 4 (the box is 1 x 0.25 x 0.25)"
