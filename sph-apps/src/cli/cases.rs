@@ -3,7 +3,8 @@
 //! select it.
 
 use crate::cases::{self, Physics, Scheme};
-use sph_core::{AvForm, Choice, Volume, PRESETS};
+use crate::cli::run::scheme::scheme_flags;
+use sph_core::PRESETS;
 
 /// `sphexa cases`: one line per case, then its default scheme as the
 /// options that would select it.
@@ -38,32 +39,7 @@ pub(crate) fn list_cases() {
 /// A scheme (and the case's softening and Courant factor) written as the
 /// `sphexa run` options that select it.
 fn scheme_options(s: &Scheme, physics: Physics) -> String {
-    let on = |b: bool| if b { "on" } else { "off" };
-    let gradients = s.gradients.name();
-    let mut text = format!(
-        "--gradients {gradients} --grad-h {} --alpha {} --av-switches {}",
-        on(s.grad_h),
-        s.alpha(),
-        on(s.switches().is_some())
-    );
-    if let Some(c) = s.conductivity {
-        text += &format!(" --conductivity {c}");
-    }
-    if let Some(e) = s.artificial_stress {
-        text += &format!(" --artificial-stress {e}");
-    }
-    if s.fixed_h {
-        text += " --smoothing-length fixed";
-    }
-    if s.volume != Volume::Mass {
-        text += &format!(" --volume {}", s.volume.name());
-    }
-    if s.av_cleaning {
-        text += " --av-cleaning on";
-    }
-    if s.av_form != AvForm::Paper {
-        text += &format!(" --av-form {}", s.av_form.name());
-    }
+    let mut text = scheme_flags(s);
     if let Some(soft) = physics.softening {
         text += &format!(" --softening {soft} (self-gravity)");
     }

@@ -5,7 +5,7 @@
 pub(crate) mod args;
 mod layers;
 mod resolved;
-mod scheme;
+pub(crate) mod scheme;
 
 use crate::cli::parse::CheckpointSpec;
 use crate::cli::start_threads;

@@ -3,6 +3,7 @@
 //! the value it ran with.
 
 use super::args::{CurveArg, RunArgs, DEFAULT_MOMENTUM_BOUND};
+use super::scheme::SCHEME_OPTIONS;
 use crate::simulation::Stop;
 use sph_core::{Choice, HydroConfig};
 use std::path::Path;
@@ -23,7 +24,6 @@ pub(crate) fn resolved_config(
     let mut set = |k: &str, v: Value| {
         t.insert(k.to_owned(), v);
     };
-    let on = |b: bool| Value::String(if b { "on" } else { "off" }.into());
     set("case", Value::String(case.into()));
     set("side", Value::Integer(side as i64));
     match stop {
@@ -44,7 +44,6 @@ pub(crate) fn resolved_config(
         set("scheme", Value::String(s.clone()));
     }
     let s = &config.scheme;
-    set("gradients", Value::String(s.gradients.name().into()));
     set(
         "curve",
         Value::String(match a.curve {
@@ -52,26 +51,14 @@ pub(crate) fn resolved_config(
             CurveArg::Morton => "morton".into(),
         }),
     );
-    set("alpha", Value::Float(s.alpha()));
     set("courant", Value::Float(config.timestep.k_courant));
     set(
         "first-step",
         Value::String(config.timestep.first_step.name().into()),
     );
-    set("grad-h", on(s.grad_h));
-    set("av-switches", on(s.switches().is_some()));
-    set("conductivity", Value::Float(s.conductivity.unwrap_or(0.0)));
-    set(
-        "artificial-stress",
-        Value::Float(s.artificial_stress.unwrap_or(0.0)),
-    );
-    set(
-        "smoothing-length",
-        Value::String(if s.fixed_h { "fixed" } else { "adaptive" }.into()),
-    );
-    set("volume", Value::String(s.volume.name().into()));
-    set("av-cleaning", on(s.av_cleaning));
-    set("av-form", Value::String(s.av_form.name().into()));
+    for o in SCHEME_OPTIONS {
+        set(o.key, (o.value)(s).toml());
+    }
     set("theta", Value::Float(a.theta));
     if let Some(g) = config.gravity {
         set("softening", Value::Float(g.softening));
