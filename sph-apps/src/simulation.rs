@@ -112,6 +112,20 @@ pub struct Summary {
     pub watch: WatchSummary,
 }
 
+/// Whether a run of `hydro` has reached `stop`; if not, with an end time,
+/// the next step is cut to land on it.
+fn stop_reached<C: Communicator>(hydro: &mut Hydro<FastKernel, C>, stop: Stop) -> bool {
+    let t = hydro.time();
+    match stop {
+        Stop::Steps(s) => hydro.steps() >= s,
+        Stop::Time(te) if t >= te * (1.0 - 1e-12) => true,
+        Stop::Time(te) => {
+            hydro.limit_next_dt(te - t);
+            false
+        }
+    }
+}
+
 /// A run in progress: the scene's particles (this rank's share) and the
 /// pipeline.
 #[derive(Debug)]
@@ -311,23 +325,11 @@ impl<C: Communicator> Simulation<C> {
         let mut tally = Tally::new(n);
         let start = outputs.start;
         let mut observers = outputs.observers(self.watch.as_mut());
-        loop {
-            let t = self.hydro.time();
-            match stop {
-                Stop::Steps(s) if self.hydro.steps() >= s => break,
-                Stop::Time(te) if t >= te * (1.0 - 1e-12) => break,
-                _ => {}
-            }
-            if let Stop::Time(te) = stop {
-                self.hydro.limit_next_dt(te - t);
-            }
-            let r = match self
+        while !stop_reached(&mut self.hydro, stop) {
+            let r = self
                 .hydro
                 .step(&mut self.scene.particles, &mut self.scene.bbox)
-            {
-                Ok(r) => r,
-                Err(e) => return Err(watch::locate(e, &self.scene.particles, self.hydro.owned())),
-            };
+                .map_err(|e| watch::locate(e, &self.scene.particles, self.hydro.owned()))?;
             if let Some(hook) = self.after_step {
                 hook();
             }
