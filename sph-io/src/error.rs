@@ -171,6 +171,79 @@ pub enum IoError {
         /// The field.
         field: String,
     },
+    /// A value read or to be written is NaN or infinite.
+    #[error("{}: {field}: element {index} is {value}; values must be finite", path.display())]
+    NonFinite {
+        /// The file.
+        path: PathBuf,
+        /// The dataset or attribute, as `GROUP/NAME` (`PartType0/Masses`,
+        /// `Header/BoxSize`).
+        field: String,
+        /// Index of the first non-finite value, in file order (row-major
+        /// for `N x 3` datasets: row `index / 3`, column `index % 3`).
+        index: u64,
+        /// The value.
+        value: f64,
+    },
+    /// A SWIFT/GADGET file ([`crate::swift`]) whose structure this crate
+    /// does not read: no `Header`, a dataset of another shape or type, a
+    /// `Dimension` other than 3, negative ids, inconsistent counts, masses
+    /// neither stored nor in `MassTable`.
+    #[error("{}: {found}; sph-io reads {allowed}", path.display())]
+    SwiftLayout {
+        /// The file.
+        path: PathBuf,
+        /// What the file holds.
+        found: String,
+        /// What is allowed instead.
+        allowed: String,
+    },
+    /// A SWIFT/GADGET file with particles of another type than gas.
+    #[error(
+        "{}: {found}: particles other than gas; sph-io reads gas only (PartType0; NumPart_ThisFile and NumPart_Total zero beyond entry 0, no other PartType group)",
+        path.display()
+    )]
+    SwiftOtherTypes {
+        /// The file.
+        path: PathBuf,
+        /// What shows the other types (a count or a group).
+        found: String,
+    },
+    /// A cosmological SWIFT/GADGET file (comoving coordinates, an expansion
+    /// factor other than 1).
+    #[error(
+        "{}: {found}: a cosmological file; sph-io reads non-cosmological files only ('Cosmology/Cosmological run' 0 or absent, Header 'Redshift' 0 and 'Scale-factor' 1 where present)",
+        path.display()
+    )]
+    SwiftCosmological {
+        /// The file.
+        path: PathBuf,
+        /// The attribute that shows it, with its value.
+        found: String,
+    },
+    /// A snapshot in several files (`NumFilesPerSnapshot > 1`) whose pieces
+    /// cannot be found or do not agree.
+    #[error(
+        "{}: {found}; sph-io reads a snapshot of K files as NAME.0.hdf5 .. NAME.(K-1).hdf5, all present, with the same NumFilesPerSnapshot, NumPart_Total, BoxSize, Time and MassTable, and NumPart_ThisFile adding up to NumPart_Total",
+        path.display()
+    )]
+    SwiftMultiFile {
+        /// The file named by the caller.
+        path: PathBuf,
+        /// What is wrong.
+        found: String,
+    },
+    /// A SWIFT/GADGET file whose thermal variable is entropy.
+    #[error(
+        "{}: Header/Flag_Entropy_ICs = {found}: the file holds entropy, not internal energy; sph-io reads files with Flag_Entropy_ICs 0 (InternalEnergy / InternalEnergies)",
+        path.display()
+    )]
+    SwiftEntropy {
+        /// The file.
+        path: PathBuf,
+        /// The flag's value(s) as found.
+        found: String,
+    },
 }
 
 fn at(step: &Option<String>, field: &Option<String>) -> String {

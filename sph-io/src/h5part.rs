@@ -239,7 +239,7 @@ fn fill_dataset(b: &mut hdf5_pure::DatasetBuilder, f: &Field, crc: u32) {
     .set_attr(A_CRC, AttrValue::U32(crc));
 }
 
-fn encoder_error(path: &Path, e: hdf5_pure::Error) -> IoError {
+pub(crate) fn encoder_error(path: &Path, e: hdf5_pure::Error) -> IoError {
     IoError::Format {
         path: path.to_owned(),
         step: None,

@@ -39,7 +39,8 @@
 //! rows in place, and the file is renamed when all are done; any number of
 //! processes reads it back, each its share of rows. [`foreign`] reads the
 //! H5Part files of other codes (SPH-EXA's layout: no checksums, `f32` or
-//! integer fields).
+//! integer fields). [`swift`] reads and writes gas particles in the
+//! SWIFT/GADGET layout (`Header`, `Units`, `PartType0`).
 //!
 //! Integrity: a file is written to `NAME.tmp` and renamed when complete;
 //! every field carries a CRC32 and every step a CRC32 of its metadata, both
@@ -85,6 +86,7 @@ pub mod h5part;
 pub mod h5part_c;
 pub mod slab;
 mod snapshot;
+pub mod swift;
 
 use std::path::Path;
 
