@@ -25,9 +25,11 @@ use sph_core::{FieldSet, HydroConfig, Particles};
 use sph_tree::BoundingBox;
 
 pub(crate) mod scheme;
+pub(crate) mod scheme_options;
 pub(crate) mod setup;
 
 pub use scheme::{FirstStep, Physics, Scheme, SchemeOverrides};
+pub use scheme_options::{scheme_option, SchemeOption, Setting, Values, SCHEME_OPTIONS};
 pub use setup::{initial_h, Share};
 
 /// Declares each case's module and lists its type in [`CASES`]: one line
@@ -605,11 +607,10 @@ mod tests {
     #[test]
     fn overrides_reach_the_scene() {
         let case = lookup("sedov").expect("sedov");
-        let o = SchemeOverrides {
-            gradients: Some(sph_core::Gradients::Kernel),
-            alpha: Some(0.5),
-            ..Default::default()
-        };
+        let o = SchemeOverrides::default()
+            .with("gradients", Setting::Name("kernel"))
+            .and_then(|o| o.with("alpha", Setting::Number(0.5)))
+            .expect("scheme options");
         let scene = case
             .setup_with(5, HydroConfig::default(), &o)
             .expect("set-up");

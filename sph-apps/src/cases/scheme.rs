@@ -2,9 +2,11 @@
 //! a case's scheme ([`Scheme`], from sph-core) and physics ([`Physics`])
 //! are written into a [`HydroConfig`].
 
+use super::scheme_options::{Setting, SCHEME_OPTIONS, SCHEME_OPTION_COUNT};
+use crate::AppError;
 pub use sph_core::timestep::FirstStep;
 pub use sph_core::Scheme;
-use sph_core::{AvForm, Eos, Gradients, HydroConfig, Volume};
+use sph_core::{Eos, HydroConfig};
 use sph_gravity::GravityParams;
 
 /// The physics of a case besides its scheme: the equation of state,
@@ -32,37 +34,25 @@ impl Physics {
     };
 }
 
-/// What a run changes in a case's scheme (the command line's `--scheme`,
-/// `--gradients`, `--grad-h`, `--alpha`, `--av-switches`,
-/// `--conductivity`, `--artificial-stress`, `--smoothing-length`,
-/// `--volume`, `--av-cleaning`, `--av-form`, `--softening`, `--courant`,
-/// `--first-step`); `None` keeps the case's choice. The
-/// default overrides nothing.
+/// What a run changes in a case's scheme: a preset (`--scheme`), the
+/// scheme options of [`SCHEME_OPTIONS`] (`--gradients`, `--alpha`, ...),
+/// and the run's `--softening`, `--courant` and `--first-step`; `None`
+/// keeps the case's choice. The default overrides nothing.
+///
+/// ```
+/// use sph_apps::cases::{Scheme, SchemeOverrides, Setting};
+///
+/// let o = SchemeOverrides::default().with("alpha", Setting::Number(0.5)).unwrap();
+/// assert_eq!(o.over(Scheme::PAPER).alpha(), 0.5);
+/// assert!(SchemeOverrides::default().with("alfa", Setting::Number(0.5)).is_err());
+/// ```
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct SchemeOverrides {
     /// A whole scheme in place of the case's (a preset), before the
-    /// single overrides below.
+    /// single options.
     pub preset: Option<Scheme>,
-    /// Gradient operator.
-    pub gradients: Option<Gradients>,
-    /// Whether the grad-h factor Omega enters.
-    pub grad_h: Option<bool>,
-    /// Viscosity strength (the maximum when switches are on).
-    pub alpha: Option<f64>,
-    /// Time-dependent viscosity switches.
-    pub av_switches: Option<bool>,
-    /// Artificial conductivity `alpha_u` (0: off).
-    pub conductivity: Option<f64>,
-    /// Artificial stress `epsilon` (0: off).
-    pub artificial_stress: Option<f64>,
-    /// Whether smoothing lengths stay fixed.
-    pub fixed_h: Option<bool>,
-    /// Particle volumes.
-    pub volume: Option<Volume>,
-    /// AV cleaning (after SPH-EXA's; approaching pairs only).
-    pub av_cleaning: Option<bool>,
-    /// Form of the viscosity and of the Courant signal velocity.
-    pub av_form: Option<AvForm>,
+    /// The value of each option of [`SCHEME_OPTIONS`] (same order), if set.
+    pub options: [Option<Setting>; SCHEME_OPTION_COUNT],
     /// Self-gravity softening scale (cases with self-gravity).
     pub softening: Option<f64>,
     /// Courant factor (over the case's, see [`Physics::courant`]).
@@ -73,38 +63,44 @@ pub struct SchemeOverrides {
 }
 
 impl SchemeOverrides {
-    /// `base` (or the preset) with these overrides.
+    /// These overrides with the scheme option `key` (its long option
+    /// without dashes) set to `value`.
+    ///
+    /// # Errors
+    /// [`AppError::Usage`] naming `key` and the scheme options, when no
+    /// scheme option has that name.
+    pub fn with(mut self, key: &str, value: Setting) -> Result<Self, AppError> {
+        let i = SCHEME_OPTIONS
+            .iter()
+            .position(|o| o.key == key)
+            .ok_or_else(|| {
+                let keys: Vec<&str> = SCHEME_OPTIONS.iter().map(|o| o.key).collect();
+                AppError::Usage(format!(
+                    "{key}: no such scheme option; scheme options: {}",
+                    keys.join(", ")
+                ))
+            })?;
+        self.options[i] = Some(value);
+        Ok(self)
+    }
+
+    /// The value set for the scheme option `key`, if any.
+    pub fn get(&self, key: &str) -> Option<Setting> {
+        SCHEME_OPTIONS
+            .iter()
+            .zip(&self.options)
+            .find(|(o, _)| o.key == key)
+            .and_then(|(_, v)| *v)
+    }
+
+    /// `base` (or the preset) with these overrides, applied in the order of
+    /// [`SCHEME_OPTIONS`].
     pub fn over(&self, base: Scheme) -> Scheme {
         let mut s = self.preset.unwrap_or(base);
-        if let Some(g) = self.gradients {
-            s.gradients = g;
-        }
-        if let Some(g) = self.grad_h {
-            s.grad_h = g;
-        }
-        if let Some(a) = self.alpha {
-            s.set_alpha(a);
-        }
-        if let Some(on) = self.av_switches {
-            s.set_switches(on);
-        }
-        if let Some(c) = self.conductivity {
-            s.conductivity = (c > 0.0).then_some(c);
-        }
-        if let Some(e) = self.artificial_stress {
-            s.artificial_stress = (e > 0.0).then_some(e);
-        }
-        if let Some(f) = self.fixed_h {
-            s.fixed_h = f;
-        }
-        if let Some(v) = self.volume {
-            s.volume = v;
-        }
-        if let Some(c) = self.av_cleaning {
-            s.av_cleaning = c;
-        }
-        if let Some(f) = self.av_form {
-            s.av_form = f;
+        for (o, v) in SCHEME_OPTIONS.iter().zip(&self.options) {
+            if let Some(v) = *v {
+                (o.set)(&mut s, v);
+            }
         }
         s
     }
@@ -208,12 +204,11 @@ mod tests {
     fn overrides_change_only_what_they_name() {
         let none = SchemeOverrides::default();
         assert_eq!(none.over(Scheme::PAPER), Scheme::PAPER);
-        let o = SchemeOverrides {
-            alpha: Some(0.3),
-            av_switches: Some(true),
-            conductivity: Some(0.0),
-            ..Default::default()
-        };
+        let o = SchemeOverrides::default()
+            .with("alpha", Setting::Number(0.3))
+            .and_then(|o| o.with("av-switches", Setting::Switch(true)))
+            .and_then(|o| o.with("conductivity", Setting::Number(0.0)))
+            .expect("scheme options");
         let s = o.over(Scheme::PAPER);
         assert!(matches!(s.viscosity, Viscosity::Switched(p) if p.alpha_max == 0.3));
         assert_eq!(s.gradients, Scheme::PAPER.gradients);
@@ -221,9 +216,10 @@ mod tests {
         // A preset replaces the case's scheme, then the overrides apply.
         let p = SchemeOverrides {
             preset: Some(Scheme::NOH),
-            av_switches: Some(false),
             ..Default::default()
-        };
+        }
+        .with("av-switches", Setting::Switch(false))
+        .expect("a scheme option");
         assert_eq!(
             p.over(Scheme::PAPER).viscosity,
             Viscosity::Constant { alpha: 0.7 }

@@ -2,6 +2,7 @@
 //! the value types of its options that are not `sph-core`'s (those take
 //! their values from [`sph_core::Choice`]).
 
+use super::scheme::{SchemeArgs, HEADING};
 use crate::cli::parse::{
     case_names, choice, parse_checkpoint_every, parse_count, parse_courant, parse_duration,
     parse_field_list, parse_keep, parse_kernel, parse_non_negative, parse_positive, parse_side,
@@ -10,27 +11,8 @@ use crate::cli::parse::{
 };
 use clap::{Args, Parser, ValueEnum};
 use sph_core::timestep::FirstStep;
-use sph_core::{AvForm, Gradients, Volume};
 use sph_kernels::KernelChoice;
 use std::path::PathBuf;
-
-/// `--smoothing-length`: adaptive or fixed h.
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq)]
-pub(crate) enum SmoothingArg {
-    /// Follows the neighbour count every step.
-    Adaptive,
-    /// Stays as set up.
-    Fixed,
-}
-
-/// An on/off option (`--grad-h`, `--av-switches`, `--av-cleaning`).
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq)]
-pub(crate) enum Switch {
-    /// Enabled.
-    On,
-    /// Disabled.
-    Off,
-}
 
 /// `--curve`: the space-filling curve.
 #[derive(ValueEnum, Clone, Copy, Debug)]
@@ -104,18 +86,15 @@ pub(crate) struct RunArgs {
     /// switches up to alpha 0.7), `evrard` (kernel gradients, no grad-h,
     /// switches up to alpha 0.5, conductivity 3); `sphexa cases` lists them. The options
     /// below override it one by one.
-    #[arg(long, value_name = "NAME")]
+    #[arg(long, value_name = "NAME", help_heading = HEADING)]
     pub(crate) scheme: Option<String>,
-    /// Gradient operator (default: the case's, see `sphexa cases`).
-    #[arg(long, value_parser = choice::<Gradients>())]
-    pub(crate) gradients: Option<Gradients>,
+    /// The scheme options, each over the case's scheme or the preset
+    /// (their flags come from `sph_apps::cases::SCHEME_OPTIONS`).
+    #[command(flatten)]
+    pub(crate) scheme_options: SchemeArgs,
     /// Space-filling curve for sorting particles.
     #[arg(long, value_enum, default_value = "hilbert")]
     pub(crate) curve: CurveArg,
-    /// Artificial viscosity strength alpha, the maximum with switches; a
-    /// number >= 0 (default: the case's, see `sphexa cases`).
-    #[arg(long, allow_negative_numbers = true, value_parser = parse_non_negative)]
-    pub(crate) alpha: Option<f64>,
     /// Courant factor, in (0, 1] (default: the case's, see `sphexa cases`:
     /// 0.2, evrard 0.5).
     #[arg(long, allow_negative_numbers = true, value_parser = parse_courant)]
@@ -126,50 +105,9 @@ pub(crate) struct RunArgs {
     /// fewer to t = 0.05.
     #[arg(long, value_parser = choice::<FirstStep>())]
     pub(crate) first_step: Option<FirstStep>,
-    /// The grad-h correction Omega (default: the case's, see `sphexa cases`).
-    #[arg(long, value_enum)]
-    pub(crate) grad_h: Option<Switch>,
     /// Leave out the grad-h correction (Omega = 1): `--grad-h off`.
-    #[arg(long, conflicts_with = "grad_h")]
+    #[arg(long, conflicts_with = "grad_h", help_heading = HEADING)]
     pub(crate) no_grad_h: bool,
-    /// Time-dependent viscosity switches: each particle's alpha rises to
-    /// --alpha in shocks and decays to 0.05 elsewhere (SPH-EXA's "ve"
-    /// switches). Default: the case's, see `sphexa cases`.
-    #[arg(long, value_enum)]
-    pub(crate) av_switches: Option<Switch>,
-    /// Artificial conductivity of internal energy alpha_u, a number >= 0
-    /// (0 = off; ~1 smooths wall heating at shocks and walls). Default: the
-    /// scheme's (1 in `ve-ac`, 3 in `evrard`, off in the other presets).
-    #[arg(long, allow_negative_numbers = true, value_parser = parse_non_negative)]
-    pub(crate) conductivity: Option<f64>,
-    /// Artificial stress epsilon against the tensile instability (Monaghan
-    /// 2000): a repulsion between particles under negative pressure that
-    /// close in below the lattice spacing; a number >= 0 (0 = off; 0.2 is
-    /// Monaghan's value). Default: the case's (square-patch: 0.2; off
-    /// elsewhere).
-    #[arg(long, allow_negative_numbers = true, value_parser = parse_non_negative)]
-    pub(crate) artificial_stress: Option<f64>,
-    /// Smoothing lengths: `adaptive` follows the neighbour count every
-    /// step; `fixed` keeps each particle's h as set up (weakly compressible
-    /// flows with a free surface). Default: the case's (square-patch:
-    /// fixed; adaptive elsewhere).
-    #[arg(long, value_enum)]
-    pub(crate) smoothing_length: Option<SmoothingArg>,
-    /// Particle volumes (default: the case's, see `sphexa cases`).
-    #[arg(long, value_parser = choice::<Volume>())]
-    pub(crate) volume: Option<Volume>,
-    /// AV cleaning after SPH-EXA's: the viscosity of an approaching pair acts
-    /// on the velocity jump left after a limited linear reconstruction from
-    /// both sides, so shear layers and smooth flows keep their kinetic
-    /// energy while shocks keep their full viscosity. Default: the case's (kelvin-helmholtz:
-    /// see `sphexa cases`).
-    #[arg(long, value_enum)]
-    pub(crate) av_cleaning: Option<Switch>,
-    /// Form of the artificial viscosity and of the Courant signal velocity
-    /// that goes with it (default: the scheme's: `sph-exa` in `ve` and
-    /// `ve-ac`, `paper` in the other presets).
-    #[arg(long, value_parser = choice::<AvForm>())]
-    pub(crate) av_form: Option<AvForm>,
     /// Self-gravity: opening angle theta of the tree, a positive number
     /// (cases with gravity only).
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true,

@@ -3,7 +3,8 @@
 //! the value it ran with.
 
 use super::args::{CurveArg, RunArgs, DEFAULT_MOMENTUM_BOUND};
-use super::scheme::SCHEME_OPTIONS;
+use super::scheme::toml_value;
+use crate::cases::SCHEME_OPTIONS;
 use crate::simulation::Stop;
 use sph_core::{Choice, HydroConfig};
 use std::path::Path;
@@ -57,7 +58,7 @@ pub(crate) fn resolved_config(
         Value::String(config.timestep.first_step.name().into()),
     );
     for o in SCHEME_OPTIONS {
-        set(o.key, (o.value)(s).toml());
+        set(o.key, toml_value((o.get)(s)));
     }
     set("theta", Value::Float(a.theta));
     if let Some(g) = config.gravity {

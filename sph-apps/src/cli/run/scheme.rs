@@ -1,23 +1,124 @@
-//! The scheme options of `sphexa run` both ways: as changes to the case's
-//! scheme ([`scheme_overrides`]), and a scheme written back in the
-//! options' terms ([`SCHEME_OPTIONS`], read by the resolved `config.toml`
-//! and by `sphexa cases`); and their check in the options' terms.
+//! The scheme options of `sphexa run`: their flags, built from the one
+//! table [`SCHEME_OPTIONS`] ([`SchemeArgs`]), the changes they make to the
+//! case's scheme ([`scheme_overrides`]), a scheme written back in their
+//! terms ([`scheme_flags`], and the resolved `config.toml`), and their
+//! check in the options' terms.
 
-use super::args::{RunArgs, SmoothingArg, Switch};
-use crate::cases::{Scheme, SchemeOverrides};
+use super::args::RunArgs;
+use crate::cases::{Scheme, SchemeOverrides, Setting, Values, SCHEME_OPTIONS};
+use crate::cli::parse::parse_non_negative;
 use crate::AppError;
-use sph_core::{AvForm, Choice, Volume, PRESETS};
-use std::fmt;
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser, ValueParser};
+use clap::{Arg, ArgAction, ArgMatches, Args, Command, FromArgMatches};
+use sph_core::PRESETS;
+
+/// The heading of the scheme options in `sphexa run --help`.
+pub(crate) const HEADING: &str = "Scheme (over the case's, or the --scheme preset's)";
+
+/// The values of the scheme options given on the command line (same order
+/// as [`SCHEME_OPTIONS`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct SchemeArgs(pub(crate) [Option<Setting>; SCHEME_OPTIONS.len()]);
+
+impl SchemeArgs {
+    /// The value given for `key`, if any.
+    pub(crate) fn get(&self, key: &str) -> Option<Setting> {
+        SCHEME_OPTIONS
+            .iter()
+            .zip(&self.0)
+            .find(|(o, _)| o.key == key)
+            .and_then(|(_, v)| *v)
+    }
+}
+
+/// The argument id of an option: its key with `_` for `-`, as clap's
+/// derive names the other options' fields.
+fn id(key: &str) -> String {
+    key.replace('-', "_")
+}
+
+/// The names of `values` as a parser to [`Setting::Name`], each with its
+/// help in `--help`.
+fn names_parser(names: fn() -> Vec<(&'static str, &'static str)>) -> ValueParser {
+    let values = names()
+        .into_iter()
+        .map(|(name, help)| PossibleValue::new(name).help(help));
+    PossibleValuesParser::new(values)
+        .map(move |given| {
+            let (name, _) = names()
+                .into_iter()
+                .find(|(name, _)| *name == given)
+                .expect("the parser accepts only listed names");
+            Setting::Name(name)
+        })
+        .into()
+}
+
+/// The command-line argument of each scheme option.
+fn scheme_args() -> impl Iterator<Item = Arg> {
+    SCHEME_OPTIONS.iter().map(|o| {
+        let parser: ValueParser = match o.values {
+            Values::Names(names) => names_parser(names),
+            Values::NonNegative => {
+                ValueParser::new(|s: &str| parse_non_negative(s).map(Setting::Number))
+            }
+            Values::Switch => PossibleValuesParser::new([
+                PossibleValue::new("on").help("Enabled"),
+                PossibleValue::new("off").help("Disabled"),
+            ])
+            .map(|v| Setting::Switch(v == "on"))
+            .into(),
+        };
+        Arg::new(id(o.key))
+            .long(o.key)
+            .help(o.help)
+            .value_name(id(o.key).to_uppercase())
+            .action(ArgAction::Set)
+            .allow_negative_numbers(matches!(o.values, Values::NonNegative))
+            .value_parser(parser)
+            .help_heading(HEADING)
+    })
+}
+
+impl FromArgMatches for SchemeArgs {
+    fn from_arg_matches(m: &ArgMatches) -> Result<Self, clap::Error> {
+        let mut a = SchemeArgs::default();
+        a.update_from_arg_matches(m)?;
+        Ok(a)
+    }
+
+    fn update_from_arg_matches(&mut self, m: &ArgMatches) -> Result<(), clap::Error> {
+        for (o, v) in SCHEME_OPTIONS.iter().zip(&mut self.0) {
+            if let Some(s) = m.try_get_one::<Setting>(&id(o.key)).map_err(|e| {
+                clap::Error::raw(clap::error::ErrorKind::InvalidValue, e.to_string())
+            })? {
+                *v = Some(*s);
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Args for SchemeArgs {
+    fn augment_args(cmd: Command) -> Command {
+        cmd.args(scheme_args())
+    }
+
+    fn augment_args_for_update(cmd: Command) -> Command {
+        Self::augment_args(cmd)
+    }
+}
 
 /// Checks the scheme the run will use (the case's with the command line's
 /// overrides) before the solver sees it, in the options' terms.
 pub(crate) fn check_scheme(s: &Scheme, a: &RunArgs, case: &str) -> Result<(), AppError> {
     if let Some(sw) = s.switches() {
         if s.alpha() < sw.alpha_min || s.alpha().is_nan() {
-            let origin = match (a.alpha, a.av_switches, &a.scheme) {
-                (Some(_), Some(_), _) => "--av-switches on",
-                (Some(_), None, Some(_)) => "the scheme given by --scheme",
-                (Some(_), None, None) => "the scheme of case '{case}'",
+            let given = |key| a.scheme_options.get(key).is_some();
+            let origin = match (given("alpha"), given("av-switches"), &a.scheme) {
+                (true, true, _) => "--av-switches on",
+                (true, false, Some(_)) => "the scheme given by --scheme",
+                (true, false, None) => "the scheme of case '{case}'",
                 _ => "the scheme",
             }
             .replace("{case}", case);
@@ -48,135 +149,34 @@ pub(crate) fn scheme_overrides(a: &RunArgs) -> Result<SchemeOverrides, AppError>
         })?),
         None => None,
     };
-    Ok(SchemeOverrides {
+    let overrides = SchemeOverrides {
         preset,
-        gradients: a.gradients,
-        grad_h: if a.no_grad_h {
-            Some(false)
-        } else {
-            a.grad_h.map(|g| g == Switch::On)
-        },
-        alpha: a.alpha,
-        av_switches: a.av_switches.map(|s| s == Switch::On),
-        conductivity: a.conductivity,
-        artificial_stress: a.artificial_stress,
-        fixed_h: a.smoothing_length.map(|s| s == SmoothingArg::Fixed),
-        volume: a.volume,
-        av_cleaning: a.av_cleaning.map(|s| s == Switch::On),
-        av_form: a.av_form,
+        options: a.scheme_options.0,
         softening: a.softening,
         courant: a.courant,
         first_step: a.first_step,
-    })
+    };
+    if a.no_grad_h {
+        return overrides.with("grad-h", Setting::Switch(false));
+    }
+    Ok(overrides)
 }
 
-/// A scheme option's value as the command line writes it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) enum Setting {
-    /// A named value (`--gradients iad`).
-    Name(&'static str),
-    /// A number (`--alpha 1`).
-    Number(f64),
-    /// `on` or `off`.
-    Switch(bool),
-}
-
-impl fmt::Display for Setting {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Setting::Name(name) => f.write_str(name),
-            Setting::Number(x) => write!(f, "{x}"),
-            Setting::Switch(on) => f.write_str(if *on { "on" } else { "off" }),
-        }
+/// A setting as a `config.toml` value.
+pub(crate) fn toml_value(s: Setting) -> toml::Value {
+    match s {
+        Setting::Number(x) => toml::Value::Float(x),
+        other => toml::Value::String(other.to_string()),
     }
 }
 
-impl Setting {
-    /// The value in a `config.toml`.
-    pub(crate) fn toml(self) -> toml::Value {
-        match self {
-            Setting::Number(x) => toml::Value::Float(x),
-            other => toml::Value::String(other.to_string()),
-        }
-    }
-}
-
-/// One scheme option seen from a [`Scheme`]: its flag (the long option,
-/// also its `config.toml` key), its value in the scheme, and whether
-/// `sphexa cases` shows it for that scheme.
-pub(crate) struct SchemeOption {
-    /// The long option without dashes.
-    pub(crate) key: &'static str,
-    /// Its value in a scheme.
-    pub(crate) value: fn(&Scheme) -> Setting,
-    /// Whether a scheme listing shows it (the four basic options always,
-    /// the others where they differ from the paper's scheme).
-    pub(crate) listed: fn(&Scheme) -> bool,
-}
-
-/// Every scheme option, written from a [`Scheme`], in the order
-/// `sphexa cases` lists them: the one place the resolved `config.toml`
-/// and the listing take a scheme's options from.
-pub(crate) const SCHEME_OPTIONS: &[SchemeOption] = &[
-    SchemeOption {
-        key: "gradients",
-        value: |s| Setting::Name(s.gradients.name()),
-        listed: |_| true,
-    },
-    SchemeOption {
-        key: "grad-h",
-        value: |s| Setting::Switch(s.grad_h),
-        listed: |_| true,
-    },
-    SchemeOption {
-        key: "alpha",
-        value: |s| Setting::Number(s.alpha()),
-        listed: |_| true,
-    },
-    SchemeOption {
-        key: "av-switches",
-        value: |s| Setting::Switch(s.switches().is_some()),
-        listed: |_| true,
-    },
-    SchemeOption {
-        key: "conductivity",
-        value: |s| Setting::Number(s.conductivity.unwrap_or(0.0)),
-        listed: |s| s.conductivity.is_some(),
-    },
-    SchemeOption {
-        key: "artificial-stress",
-        value: |s| Setting::Number(s.artificial_stress.unwrap_or(0.0)),
-        listed: |s| s.artificial_stress.is_some(),
-    },
-    SchemeOption {
-        key: "smoothing-length",
-        value: |s| Setting::Name(if s.fixed_h { "fixed" } else { "adaptive" }),
-        listed: |s| s.fixed_h,
-    },
-    SchemeOption {
-        key: "volume",
-        value: |s| Setting::Name(s.volume.name()),
-        listed: |s| s.volume != Volume::Mass,
-    },
-    SchemeOption {
-        key: "av-cleaning",
-        value: |s| Setting::Switch(s.av_cleaning),
-        listed: |s| s.av_cleaning,
-    },
-    SchemeOption {
-        key: "av-form",
-        value: |s| Setting::Name(s.av_form.name()),
-        listed: |s| s.av_form != AvForm::Paper,
-    },
-];
-
-/// `s` as the options that select it (those [`SchemeOption::listed`]
+/// `s` as the options that select it (those [`crate::cases::SchemeOption::listed`]
 /// shows), e.g. `--gradients iad --grad-h on --alpha 1 --av-switches off`.
 pub(crate) fn scheme_flags(s: &Scheme) -> String {
     let flags: Vec<String> = SCHEME_OPTIONS
         .iter()
         .filter(|o| (o.listed)(s))
-        .map(|o| format!("--{} {}", o.key, (o.value)(s)))
+        .map(|o| format!("--{} {}", o.key, (o.get)(s)))
         .collect();
     flags.join(" ")
 }
@@ -203,7 +203,7 @@ mod tests {
             let mut tokens = vec!["sedov".to_owned()];
             for o in SCHEME_OPTIONS {
                 tokens.push(format!("--{}", o.key));
-                tokens.push((o.value)(&preset).to_string());
+                tokens.push((o.get)(&preset).to_string());
             }
             let run = Run::try_parse_from(&tokens).expect("the options parse");
             let over = scheme_overrides(&run.args).expect("valid overrides");
