@@ -45,6 +45,7 @@ use std::path::Path;
 
 /// Why a run could not start or had to stop.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum AppError {
     /// Bad user input.
     #[error("{0}")]

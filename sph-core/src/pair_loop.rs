@@ -467,6 +467,7 @@ pub fn sym_mat_vec(c: &[F64s; 6], v: [F64s; 3]) -> [F64s; 3] {
 /// How gradients are computed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
+#[non_exhaustive]
 pub enum Gradients {
     /// Integral approach to derivatives (exact for linear fields).
     #[default]

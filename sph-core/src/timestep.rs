@@ -37,6 +37,7 @@ pub struct TimestepParams {
 /// integrator's previous step (the first velocity update reads
 /// `v_0 + a_0 dt0 / 2`). A resumed run continues from its checkpoint.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
 pub enum FirstStep {
     /// At most `max_growth * dt0`.
     #[default]

@@ -10,7 +10,7 @@
 //! solution: the vortex decayed to rest has L1(v_phi) = 0.32 (computed in
 //! the test from the particles), above both bounds.
 
-use sph_apps::cases::{gresho, Reference, SchemeOverrides};
+use sph_apps::cases::{gresho, Reference, SchemeOverrides, Setting};
 use sph_apps::reference::Gresho;
 use sph_apps::simulation::Stop;
 use sph_apps::Summary;
@@ -49,10 +49,9 @@ fn turn_error(p0: &Particles, id: &[f64], x: &[f64], y: &[f64]) -> f64 {
 
 /// The summary and the [`turn_error`] of a run with or without switches.
 fn run(switches: bool, name: &str) -> (Summary, f64) {
-    let overrides = SchemeOverrides {
-        av_switches: Some(switches),
-        ..Default::default()
-    };
+    let overrides = SchemeOverrides::default()
+        .with("av-switches", Setting::Switch(switches))
+        .expect("a scheme option");
     let scene = sph_validation::scene_with("gresho", SIDE, &overrides);
     let p0 = scene.particles.clone();
     let out = sph_validation::scratch(name);

@@ -66,6 +66,7 @@ impl Setting {
 
 /// The values a scheme option takes.
 #[derive(Debug, Clone, Copy)]
+#[non_exhaustive]
 pub enum Values {
     /// One of these names, each with its one-line help.
     Names(fn() -> Vec<(&'static str, &'static str)>),
