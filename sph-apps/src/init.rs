@@ -1,28 +1,45 @@
 //! Initial conditions from a snapshot file (`sphexa run --init FILE[:K]`):
-//! ours, or an H5Part file of SPH-EXA, each rank reading its share of the
+//! ours, an H5Part file of SPH-EXA, or a SWIFT/GADGET file (initial
+//! conditions or snapshot, `PartType0`), each rank taking its share of the
 //! particles in place of the case's.
 
 use crate::output::snapshot as snapfile;
 use crate::{checkpoint, AppError};
 use sph_comm::Communicator;
 
-/// The particles of snapshot `spec` (`FILE[:K]`, ours or SPH-EXA's) as
-/// this rank's share of the initial conditions of a run with `fields`;
-/// the total and, if the file has one, its box (with `boundary` kinds
-/// unless the file records them).
+/// The particles of snapshot `spec` (`FILE[:K]`, ours, SPH-EXA's or a
+/// SWIFT/GADGET file) as this rank's share of the initial conditions of a
+/// run with `fields`; the total and, if the file has one, its box (with
+/// the boundary kinds of `case_box` unless the file records them).
+///
+/// A SWIFT/GADGET file's box `[0, BoxSize)` is placed with its centre on
+/// `case_box`'s (positions shifted alike), and its smoothing lengths are
+/// converted to this code's convention for the file's kernel (SWIFT's cubic
+/// spline where the file names none): see [`sph_io::swift`]. Values are
+/// taken in the file's units; its time is not kept (runs start at 0).
 ///
 /// # Errors
 /// An unreadable file or step, a missing required field (`x`, `y`, `z`,
-/// `h`, `m`, `u`), or a bad box.
+/// `h`, `m`, `u`), a SWIFT file with what [`sph_io::swift::read_swift`]
+/// refuses, a file in neither layout, or a bad box.
 pub fn load<C: Communicator>(
     comm: &C,
     spec: &str,
     fields: sph_core::FieldSet,
-    boundary: [sph_tree::Boundary; 3],
+    case_box: &sph_tree::BoundingBox,
 ) -> Result<(sph_core::Particles, usize, Option<sph_tree::BoundingBox>), AppError> {
     use sph_io::foreign;
+    let boundary = case_box.boundary();
     let (path, k) = checkpoint::split_spec(spec)?;
-    let count = foreign::step_count(&path)?;
+    if sph_io::swift::looks_like_swift(&path) {
+        return load_swift(comm, &path, k, fields, case_box);
+    }
+    let count = foreign::step_count(&path).map_err(|e| {
+        AppError::Usage(format!(
+            "--init {}: neither an H5Part file ({e}) nor a SWIFT/GADGET file (no group 'Header')",
+            path.display()
+        ))
+    })?;
     let index = match k {
         Some(k) => k as usize,
         None => count.saturating_sub(1),
@@ -117,4 +134,57 @@ pub fn load<C: Communicator>(
     let total = usize::try_from(total)
         .map_err(|_| AppError::Usage(format!("--init {}: {total} particles", path.display())))?;
     Ok((p, total, bbox))
+}
+
+/// [`load`] of a SWIFT/GADGET file.
+fn load_swift<C: Communicator>(
+    comm: &C,
+    path: &std::path::Path,
+    step: Option<u64>,
+    fields: sph_core::FieldSet,
+    case_box: &sph_tree::BoundingBox,
+) -> Result<(sph_core::Particles, usize, Option<sph_tree::BoundingBox>), AppError> {
+    use sph_io::swift::{self, SwiftKernel};
+    let file = swift::read_swift(path)?;
+    if let Some(k) = step {
+        return Err(AppError::Usage(format!(
+            "--init {}:{k}: a SWIFT/GADGET file holds one step; give the file alone",
+            path.display()
+        )));
+    }
+    let mut gas = file.particles;
+    let factor = file
+        .header
+        .kernel
+        .unwrap_or(SwiftKernel::CubicSpline)
+        .to_sph_exa_h();
+    gas.scale_h(factor);
+    let (lo, hi) = (case_box.lo(), case_box.hi());
+    let centre: [f64; 3] = std::array::from_fn(|k| 0.5 * (lo[k] + hi[k]));
+    let lo: [f64; 3] = std::array::from_fn(|k| centre[k] - 0.5 * gas.box_size[k]);
+    gas.shift(lo);
+    let hi: [f64; 3] = std::array::from_fn(|k| lo[k] + gas.box_size[k]);
+    let bbox = sph_tree::BoundingBox::new(lo, hi, case_box.boundary())?;
+    let total = gas.len();
+    let (r, size) = (comm.rank(), comm.size());
+    let rows = total * r / size..total * (r + 1) / size;
+    let mut p = sph_core::Particles::new(rows.len(), fields);
+    p.id = gas.id[rows.clone()].to_vec();
+    let columns = [
+        ("x", &gas.x),
+        ("y", &gas.y),
+        ("z", &gas.z),
+        ("vx", &gas.vx),
+        ("vy", &gas.vy),
+        ("vz", &gas.vz),
+        ("h", &gas.h),
+        ("m", &gas.m),
+        ("u", &gas.u),
+    ];
+    for (name, v) in columns {
+        if let Some(dst) = sph_core::fields::find(name).and_then(|f| f.f64_mut(&mut p)) {
+            dst.copy_from_slice(&v[rows.clone()]);
+        }
+    }
+    Ok((p, total, Some(bbox)))
 }

@@ -421,6 +421,95 @@ fn an_sphexa_layout_file_is_read_as_initial_conditions() {
     assert!(e.contains("'u'") && e.contains("no_u.h5"), "{e}");
 }
 
+/// A SWIFT-layout file (box `[0, 1)`, SWIFT's cubic-spline `h`) holding
+/// the Sedov initial state starts the case: placed on the case's centred
+/// box, `h` converted back, the run is the case's own to rounding (the
+/// shift by 1/2 and the `h` factor round); a step spec on it, and a file in
+/// neither layout, are refused by name.
+#[test]
+fn a_swift_layout_file_is_read_as_initial_conditions() {
+    use sph_io::swift::{write_swift, SwiftKernel, SwiftParticles};
+    let dir = scratch("init-swift");
+    let scene = sph_apps::cases::lookup("sedov")
+        .unwrap()
+        .setup(10, sph_core::HydroConfig::default())
+        .unwrap();
+    let p = &scene.particles;
+    let mut gas = SwiftParticles {
+        x: p.x.clone(),
+        y: p.y.clone(),
+        z: p.z.clone(),
+        vx: p.vx.clone(),
+        vy: p.vy.clone(),
+        vz: p.vz.clone(),
+        m: p.m.clone(),
+        h: p.h.clone(),
+        u: p.u.clone(),
+        id: p.id.clone(),
+        box_size: [1.0; 3],
+        ..SwiftParticles::default()
+    };
+    gas.uncentre();
+    gas.scale_h(1.0 / SwiftKernel::CubicSpline.to_sph_exa_h());
+    let file = dir.join("sedov_ic.hdf5");
+    write_swift(&file, &gas).unwrap();
+    let (from_file, own) = (dir.join("from-file"), dir.join("own"));
+    let run = |extra: &[&str], out: &Path| {
+        let mut args = vec!["sedov", "--steps", "3", "-q", "--out", s(out)];
+        args.extend_from_slice(extra);
+        ok(&args);
+    };
+    run(&["--init", s(&file)], &from_file);
+    run(&["-n", "10"], &own);
+    let rows = |d: &Path| -> Vec<Vec<f64>> {
+        std::fs::read_to_string(d.join("conserved.csv"))
+            .unwrap()
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+            .collect()
+    };
+    let (a, b) = (rows(&from_file), rows(&own));
+    assert_eq!(a.len(), 3);
+    // Columns t, dt, E_kin, E_int: every step's time, step and energies
+    // agree to rounding.
+    for (ra, rb) in a.iter().zip(&b) {
+        for k in [1, 2, 3, 4] {
+            let scale = rb[k].abs().max(1e-300);
+            assert!(
+                (ra[k] - rb[k]).abs() <= 1e-9 * scale,
+                "column {k}: {} vs {}",
+                ra[k],
+                rb[k]
+            );
+        }
+    }
+    let e = refused(&[
+        "sedov",
+        "--init",
+        &format!("{}:1", s(&file)),
+        "--steps",
+        "1",
+        "-q",
+        "--out",
+        s(&own),
+    ]);
+    assert!(e.contains("one step") && e.contains("sedov_ic.hdf5"), "{e}");
+    let junk = dir.join("junk.hdf5");
+    std::fs::write(&junk, b"not an HDF5 file at all").unwrap();
+    let e = refused(&[
+        "sedov",
+        "--init",
+        s(&junk),
+        "--steps",
+        "1",
+        "-q",
+        "--out",
+        s(&own),
+    ]);
+    assert!(e.contains("neither") && e.contains("junk.hdf5"), "{e}");
+}
+
 /// Every registered case (AV switches, self-gravity with an open box that
 /// grows, a referenced equation of state, conductivity) restarts to the
 /// bit: 6 steps against 3 + restart + 3.

@@ -510,6 +510,16 @@ pub struct SwiftFile {
     pub header: SwiftHeader,
 }
 
+/// Whether `path` is an HDF5 file with a `Header` group: a SWIFT/GADGET
+/// file, to tell a caller trying several layouts whose error to report.
+/// False for anything unreadable.
+pub fn looks_like_swift(path: &Path) -> bool {
+    h5part::open(path)
+        .ok()
+        .and_then(|file| h5part::guard(path, None, None, || file.root().groups()).ok())
+        .is_some_and(|groups| groups.iter().any(|g| g == HEADER))
+}
+
 /// Reads the gas particles of a SWIFT/GADGET file at `path` (IC or snapshot
 /// names, any float type, any integer id type). A snapshot in `K > 1`
 /// files is read from `NAME.0.hdf5` .. `NAME.(K-1).hdf5` (`path` is any one

@@ -203,8 +203,12 @@ pub(crate) struct RunArgs {
     /// Start the case from the particles of snapshot FILE (Step#K, default
     /// the last): ours, or an H5Part file of SPH-EXA (group Step#K with 1-D
     /// datasets x, y, z, h, m, u and optionally vx, vy, vz, id, any float
-    /// or integer type; the box from attribute `box` if present). Time
-    /// starts at 0; the case supplies the scheme and the reference.
+    /// or integer type; the box from attribute `box` if present), or a
+    /// SWIFT/GADGET file (IC or snapshot: Header/BoxSize, PartType0 gas
+    /// only; its box [0, BoxSize) is centred on the case's, its smoothing
+    /// lengths converted from SWIFT's convention for its kernel, cubic
+    /// spline if unnamed; values in the file's units). Time starts at 0;
+    /// the case supplies the scheme and the reference.
     #[arg(long, value_name = "FILE[:K]")]
     pub(crate) init: Option<String>,
     /// Read options from a TOML file: one key per option, named as the

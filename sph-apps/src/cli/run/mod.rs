@@ -182,8 +182,7 @@ fn execute(a: RunArgs) -> Result<(), AppError> {
         scene.total = l.total;
         scene.bbox = l.bbox;
     } else if let Some(spec) = &a.init {
-        let (p, total, bbox) =
-            crate::init::load(&comm, spec, scene.config.fields(), scene.bbox.boundary())?;
+        let (p, total, bbox) = crate::init::load(&comm, spec, scene.config.fields(), &scene.bbox)?;
         scene.particles = p;
         scene.total = total;
         if let Some(b) = bbox {
