@@ -13,6 +13,7 @@
 //! | IAD matrices | [`iad`] |
 //! | momentum and energy, AV | [`momentum`] |
 //! | time step | [`timestep`] |
+//! | integer time line and bins of block time steps | [`timeline`] |
 //! | Press / Adams-Bashforth integrator, h update | [`integrate`] |
 //! | conserved quantities | [`conserved`] |
 //!
@@ -68,6 +69,7 @@ pub mod neighbors;
 pub mod pair_loop;
 mod particles;
 pub mod scheme;
+pub mod timeline;
 pub mod timestep;
 
 pub use av_switch::{AvSwitchParams, SwitchForm};
