@@ -92,7 +92,7 @@ impl TimeLine {
             )));
         }
         let time_base = (t_end - t_begin) / LINE as f64;
-        if !(time_base > 0.0) {
+        if time_base <= 0.0 {
             return Err(CoreError::Invalid(format!(
                 "time line [{t_begin}, {t_end}]: the span is too short for 2^{MAX_BIN} ticks"
             )));
@@ -201,7 +201,7 @@ impl TimeLine {
 
 /// Whether a particle of `bin` is at a step boundary at tick `ti`.
 pub fn is_active(ti: Ticks, bin: Bin) -> bool {
-    ti % bin.ticks() == 0
+    ti.is_multiple_of(bin.ticks())
 }
 
 /// The largest bin active at tick `ti` ([`MAX_BIN`] at 0).
