@@ -28,7 +28,7 @@ use std::path::Path;
 use std::time::Instant;
 
 pub use crate::output::energies::EnergyCheck;
-pub use crate::output::files::{CheckpointEvery, IoSummary, Outputs};
+pub use crate::output::files::{CheckpointEvery, IoSummary, Outputs, SnapshotFormat};
 pub use crate::output::progress::{Progress, Stop};
 pub use crate::output::timings::DomainSummary;
 

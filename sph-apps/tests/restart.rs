@@ -510,6 +510,99 @@ fn a_swift_layout_file_is_read_as_initial_conditions() {
     assert!(e.contains("neither") && e.contains("junk.hdf5"), "{e}");
 }
 
+/// `--snapshot-format swift` writes the state our own snapshot holds at
+/// the same step of the same run: positions moved to `[0, L)`, SWIFT's `h`
+/// (ours times `swift_h_per_h` of the kernel), the rest as they are; the
+/// file starts a run again with `--init`.
+#[test]
+fn a_swift_snapshot_holds_the_state_of_ours() {
+    use sph_io::swift::{read_swift, swift_h_per_h};
+    let dir = scratch("snap-swift");
+    let (ours, theirs) = (dir.join("ours"), dir.join("swift"));
+    let run = |out: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "sedov",
+            "-n",
+            "10",
+            "--steps",
+            "4",
+            "-q",
+            "--snapshot-every-steps",
+            "4",
+            "--out",
+            s(out),
+        ];
+        args.extend_from_slice(extra);
+        ok(&args);
+    };
+    run(
+        &ours,
+        &["--snapshot-fields", "x,y,z,vx,vy,vz,h,m,u,rho,p,id"],
+    );
+    run(&theirs, &["--snapshot-format", "swift"]);
+    let a = read(&ours.join("snapshots/snapshot_00000004.h5"));
+    let b = read_swift(&theirs.join("snapshots/snapshot_00000004.hdf5")).unwrap();
+    let g = &b.particles;
+    assert_eq!(g.len(), 1000);
+    assert_eq!(g.box_size, [1.0; 3]);
+    assert_eq!(g.time, a.time);
+    let f = |n: &str| a.field(n).and_then(FieldData::as_f64).unwrap().to_vec();
+    let ids = match a.field("id") {
+        Some(FieldData::U64(v)) => v.clone(),
+        _ => panic!("ids"),
+    };
+    // Our rows by id, to compare row for row.
+    let row: std::collections::HashMap<u64, usize> =
+        ids.iter().enumerate().map(|(i, &id)| (id, i)).collect();
+    let kernel = sph_kernels::KernelChoice::Sinc(6.0).exact().unwrap();
+    let factor = swift_h_per_h(|v| kernel.shape(v));
+    let (x, y, z, h) = (f("x"), f("y"), f("z"), f("h"));
+    let (u, rho, p, vx) = (f("u"), f("rho"), f("p"), f("vx"));
+    for (k, id) in g.id.iter().enumerate() {
+        let i = row[id];
+        for (got, want) in [(g.x[k], x[i]), (g.y[k], y[i]), (g.z[k], z[i])] {
+            assert!(
+                (got - (want + 0.5)).abs() <= 1e-15,
+                "id {id}: {got} vs {want}"
+            );
+            assert!((0.0..1.0).contains(&got));
+        }
+        assert_eq!(g.h[k], h[i] * factor, "id {id}");
+        assert_eq!((g.u[k], g.vx[k]), (u[i], vx[i]), "id {id}");
+        assert_eq!(g.rho.as_ref().unwrap()[k], rho[i], "id {id}");
+        assert_eq!(g.p.as_ref().unwrap()[k], p[i], "id {id}");
+    }
+    let again = dir.join("again");
+    ok(&[
+        "sedov",
+        "--init",
+        s(&theirs.join("snapshots/snapshot_00000004.hdf5")),
+        "--steps",
+        "1",
+        "-q",
+        "--out",
+        s(&again),
+    ]);
+    let e = refused(&[
+        "sedov",
+        "--steps",
+        "1",
+        "--snapshot-every-steps",
+        "1",
+        "--snapshot-format",
+        "swift",
+        "--snapshot-fields",
+        "x",
+        "-q",
+        "--out",
+        s(&again),
+    ]);
+    assert!(
+        e.contains("--snapshot-fields") && e.contains("swift"),
+        "{e}"
+    );
+}
+
 /// Every registered case (AV switches, self-gravity with an open box that
 /// grows, a referenced equation of state, conductivity) restarts to the
 /// bit: 6 steps against 3 + restart + 3.

@@ -58,6 +58,27 @@ pub struct Outputs {
     pub checkpoints: Option<(CheckpointEvery, usize)>,
     /// Attributes of every snapshot and checkpoint (the run's settings).
     pub attrs: Vec<(String, Attr)>,
+    /// The layout of the snapshots (checkpoints are always ours).
+    pub format: SnapshotFormat,
+}
+
+/// The layout snapshots are written in.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[non_exhaustive]
+pub enum SnapshotFormat {
+    /// Ours: H5Part, the fields asked for, with checksums.
+    #[default]
+    H5Part,
+    /// SWIFT's snapshot layout (`sph_io::swift`): the gas's coordinates in
+    /// `[0, BoxSize)`, velocities, masses, smoothing lengths in SWIFT's
+    /// convention (ours times `h_per_h`, [`sph_io::swift::swift_h_per_h`]
+    /// of the run's kernel), internal energies, ids, densities and
+    /// pressures. The particles are gathered to every rank and rank 0
+    /// writes the file.
+    Swift {
+        /// SWIFT's `h` per ours for the run's kernel.
+        h_per_h: f64,
+    },
 }
 
 /// The file outputs of a run in progress: schedules, folders, what was
@@ -67,6 +88,7 @@ pub struct FileOutputs {
     /// Attributes of every file: the run's settings and its case.
     attrs: Vec<(String, Attr)>,
     snapshots: Option<(Vec<String>, Schedule)>,
+    format: SnapshotFormat,
     snapshot_dir: PathBuf,
     checkpoint_every: Option<CheckpointEvery>,
     checkpoint_schedule: Schedule,
@@ -111,6 +133,7 @@ impl FileOutputs {
         Ok(FileOutputs {
             attrs,
             snapshots,
+            format: o.format,
             snapshot_dir: out.join("snapshots"),
             checkpoint_every: every,
             checkpoint_schedule,
@@ -160,18 +183,29 @@ impl<C: Communicator> StepObserver<C> for FileOutputs {
             .as_mut()
             .is_some_and(|(_, s)| s.due(step, t));
         if snapshot_due {
-            let fields = &files.snapshots.as_ref().expect("snapshots on").0;
-            let mut snap = Snapshot::new(step, t, state.dt_prev, snapfile::box_spec(view.bbox));
-            for (name, value) in attrs {
-                snap.set_attr(name, value.clone());
-            }
-            snap.set_attr("sphexa_kind", Attr::Str("snapshot".into()));
-            for name in fields {
-                let data = snapfile::field(p, owned.clone(), name).expect("checked by set_outputs");
-                snap.set_field(name, data);
-            }
-            let path = snapfile::numbered(&files.snapshot_dir, "snapshot", step);
-            let seconds = snapfile::write(comm, &path, &snap)?;
+            let seconds = match files.format {
+                SnapshotFormat::Swift { h_per_h } => {
+                    let path = snapfile::numbered(&files.snapshot_dir, "snapshot", step)
+                        .with_extension("hdf5");
+                    write_swift_snapshot(view, &path, h_per_h)?
+                }
+                SnapshotFormat::H5Part => {
+                    let fields = &files.snapshots.as_ref().expect("snapshots on").0;
+                    let mut snap =
+                        Snapshot::new(step, t, state.dt_prev, snapfile::box_spec(view.bbox));
+                    for (name, value) in attrs {
+                        snap.set_attr(name, value.clone());
+                    }
+                    snap.set_attr("sphexa_kind", Attr::Str("snapshot".into()));
+                    for name in fields {
+                        let data = snapfile::field(p, owned.clone(), name)
+                            .expect("checked by set_outputs");
+                        snap.set_field(name, data);
+                    }
+                    let path = snapfile::numbered(&files.snapshot_dir, "snapshot", step);
+                    snapfile::write(comm, &path, &snap)?
+                }
+            };
             let io = &mut files.summary;
             io.snapshot_seconds_mean = (io.snapshot_seconds_mean * io.snapshots as f64 + seconds)
                 / (io.snapshots + 1) as f64;
@@ -225,4 +259,60 @@ impl<C: Communicator> StepObserver<C> for FileOutputs {
             Observed::Recorded
         })
     }
+}
+
+/// Writes the particles of `view` as a SWIFT snapshot at `path` (rank 0,
+/// after gathering every rank's). Collective; returns the longest time a
+/// rank spent, in seconds.
+fn write_swift_snapshot<C: Communicator>(
+    view: &StepView<'_, C>,
+    path: &Path,
+    h_per_h: f64,
+) -> Result<f64, AppError> {
+    use sph_io::swift::{write_swift, SwiftParticles};
+    let start = Instant::now();
+    let (comm, p, owned) = (view.comm, view.particles, view.owned.clone());
+    let gather = |v: &[f64]| -> Result<Vec<f64>, AppError> {
+        let got = comm.all_gather_v(&v[owned.clone()])?;
+        Ok((0..comm.size())
+            .flat_map(|r| got.from_rank(r).to_vec())
+            .collect())
+    };
+    let ids = comm.all_gather_v(&p.id[owned.clone()])?;
+    let (lo, hi) = (view.bbox.lo(), view.bbox.hi());
+    let mut gas = SwiftParticles {
+        x: gather(&p.x)?,
+        y: gather(&p.y)?,
+        z: gather(&p.z)?,
+        vx: gather(&p.vx)?,
+        vy: gather(&p.vy)?,
+        vz: gather(&p.vz)?,
+        m: gather(&p.m)?,
+        h: gather(&p.h)?,
+        u: gather(&p.u)?,
+        id: (0..comm.size())
+            .flat_map(|r| ids.from_rank(r).to_vec())
+            .collect(),
+        rho: Some(gather(&p.rho)?),
+        p: Some(gather(&p.p)?),
+        box_size: std::array::from_fn(|k| hi[k] - lo[k]),
+        time: view.state.t,
+        units: None,
+    };
+    gas.shift(lo.map(|l| -l));
+    gas.scale_h(h_per_h);
+    let written = if comm.rank() == 0 {
+        write_swift(path, &gas).map_err(snapfile::io_error)
+    } else {
+        Ok(())
+    };
+    let failed = comm.all_reduce_scalar(u64::from(written.is_err()), ReduceOp::Max);
+    written?;
+    if failed > 0 {
+        return Err(AppError::Usage(format!(
+            "{}: rank 0 failed to write the snapshot (see its message)",
+            path.display()
+        )));
+    }
+    Ok(comm.all_reduce_scalar(start.elapsed().as_secs_f64(), ReduceOp::Max))
 }

@@ -23,6 +23,15 @@ pub(crate) enum CurveArg {
     Morton,
 }
 
+/// `--snapshot-format`: the layout of the snapshots.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq)]
+pub(crate) enum FormatArg {
+    /// Ours: H5Part (the --snapshot-fields asked for, with checksums)
+    H5part,
+    /// SWIFT's snapshot layout (PartType0: coordinates in [0, BoxSize), velocities, masses, SWIFT's smoothing lengths, internal energies, ids, densities, pressures), which SWIFT, swiftsimio and `sphexa run --init` read
+    Swift,
+}
+
 /// The default of --max-momentum-drift.
 pub(crate) const DEFAULT_MOMENTUM_BOUND: f64 = 1e-10;
 
@@ -161,6 +170,11 @@ pub(crate) struct RunArgs {
     #[arg(long, value_name = "LIST", value_parser = parse_field_list,
           long_help = snapshot_fields_help())]
     pub(crate) snapshot_fields: Option<FieldList>,
+    /// The layout of the snapshots (checkpoints are always ours). `swift`
+    /// writes OUT/snapshots/snapshot_SSSSSSSS.hdf5 with SWIFT's names and
+    /// h convention for the run's kernel; rank 0 writes the file.
+    #[arg(long, value_enum, default_value = "h5part")]
+    pub(crate) snapshot_format: FormatArg,
     /// Write a snapshot after every N-th step (N >= 1).
     #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = parse_steps)]
     pub(crate) snapshot_every_steps: Option<u64>,

@@ -10,10 +10,10 @@ pub(crate) mod scheme;
 use crate::cli::parse::CheckpointSpec;
 use crate::cli::start_threads;
 use crate::output::snapshot::{self as snapfile, Schedule};
-use crate::simulation::{CheckpointEvery, Outputs, Progress, Stop};
+use crate::simulation::{CheckpointEvery, Outputs, Progress, SnapshotFormat, Stop};
 use crate::watch::{Bounds, Watch, GRAVITY_MOMENTUM_BOUND};
 use crate::{cases, checkpoint, AppError, Simulation};
-use args::{CurveArg, RunArgs, DEFAULT_MOMENTUM_BOUND};
+use args::{CurveArg, FormatArg, RunArgs, DEFAULT_MOMENTUM_BOUND};
 use clap::ArgMatches;
 use sph_comm::Communicator;
 use sph_core::HydroConfig;
@@ -68,10 +68,28 @@ fn outputs(a: &RunArgs, config: String, t0: f64) -> Result<Outputs, AppError> {
         (Some(CheckpointSpec::Time(t)), None) => Some(CheckpointEvery::Time(t)),
         (Some(CheckpointSpec::Wall(w)), None) => Some(CheckpointEvery::Wall(w)),
     };
+    let format = match a.snapshot_format {
+        FormatArg::H5part => SnapshotFormat::H5Part,
+        FormatArg::Swift if a.snapshot_fields.is_some() => {
+            return Err(AppError::Usage(
+                "--snapshot-fields chooses the fields of our snapshots; --snapshot-format swift writes SWIFT's fixed set (leave one out)".into(),
+            ))
+        }
+        FormatArg::Swift => {
+            let kernel = a
+                .kernel
+                .exact()
+                .map_err(|e| AppError::Usage(format!("--kernel {}: {e}", a.kernel)))?;
+            SnapshotFormat::Swift {
+                h_per_h: sph_io::swift::swift_h_per_h(|v| kernel.shape(v)),
+            }
+        }
+    };
     Ok(Outputs {
         snapshots,
         checkpoints: every.map(|e| (e, a.checkpoint_keep)),
         attrs: vec![("config".into(), sph_io::Attr::Str(config))],
+        format,
     })
 }
 

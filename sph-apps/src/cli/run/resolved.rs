@@ -2,7 +2,7 @@
 //! `config` attribute of its snapshots and checkpoints): every option with
 //! the value it ran with.
 
-use super::args::{CurveArg, RunArgs, DEFAULT_MOMENTUM_BOUND};
+use super::args::{CurveArg, FormatArg, RunArgs, DEFAULT_MOMENTUM_BOUND};
 use super::scheme::toml_value;
 use crate::cases::SCHEME_OPTIONS;
 use crate::simulation::Stop;
@@ -81,6 +81,9 @@ pub(crate) fn resolved_config(
     }
     if let Some(f) = &a.snapshot_fields {
         set("snapshot-fields", Value::String(f.0.join(",")));
+    }
+    if a.snapshot_format == FormatArg::Swift {
+        set("snapshot-format", Value::String("swift".into()));
     }
     if let Some(n) = a.snapshot_every_steps {
         set("snapshot-every-steps", Value::Integer(n as i64));
