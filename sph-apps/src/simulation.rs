@@ -31,6 +31,7 @@ pub use crate::output::energies::EnergyCheck;
 pub use crate::output::files::{CheckpointEvery, IoSummary, Outputs, SnapshotFormat};
 pub use crate::output::progress::{Progress, Stop};
 pub use crate::output::timings::DomainSummary;
+pub use crate::output::totals::BinSummary;
 
 /// Everything the summary holds; written as `summary.json`.
 #[derive(Debug, Clone, Serialize)]
@@ -110,6 +111,10 @@ pub struct Summary {
     /// The run's watch of its conserved quantities: bounds, and the first
     /// step past each (see [`crate::watch`]).
     pub watch: WatchSummary,
+    /// The time bins block steps would give the particles (`--report-bins`
+    /// only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bins: Option<BinSummary>,
 }
 
 /// Whether a run of `hydro` has reached `stop`; if not, with an end time,
@@ -493,6 +498,7 @@ impl<C: Communicator> Simulation<C> {
                 .map_or(0.0, |t| per_particle(t as f64)),
             stage_seconds: totals.stage_seconds(),
             dt_limits: totals.dt_limits(),
+            bins: totals.bins(),
             l1: end.l1,
             energy_rel_drift: (end.conserved.e_tot() - first.e_tot()) / first.e_tot().abs(),
             momentum_rel_drift: if scale_p > 0.0 { dp / scale_p } else { dp },

@@ -148,6 +148,7 @@ fn benches(c: &mut Criterion) {
                     ay: &mut *ay,
                     az: &mut *az,
                     du: &mut *du,
+                    criteria: None,
                 };
                 black_box(momentum_energy(
                     &kernel, &bbox, state, &factors, grad, 1.0, &list, rates,
@@ -165,6 +166,7 @@ fn benches(c: &mut Criterion) {
                     ay: &mut *ay,
                     az: &mut *az,
                     du: &mut *du,
+                    criteria: None,
                 };
                 black_box(momentum_energy_switched(
                     &kernel, &bbox, state, &factors, grad, &alpha, &list, rates,

@@ -77,7 +77,9 @@ pub use choice::Choice;
 pub use conserved::Conserved;
 pub use eos::Eos;
 pub use error::CoreError;
-pub use hydro::{DomainStepStats, Hydro, HydroConfig, RunState, StageTimes, StepReport, STAGES};
+pub use hydro::{
+    DomainStepStats, Hydro, HydroConfig, RunState, StageTimes, StepReport, BIN_OFFSETS, STAGES,
+};
 pub use integrate::HUpdate;
 pub use neighbors::NeighborParams;
 pub use pair_loop::Gradients;

@@ -158,22 +158,12 @@ impl TimestepParams {
         max_cooling: f64,
         dt_prev: f64,
     ) -> (f64, DtLimit) {
-        let courant = self.k_courant * stats.min_h_over_vsig;
-        let div = if stats.max_abs_div_v > 0.0 {
-            self.k_rho / stats.max_abs_div_v
-        } else {
-            f64::INFINITY
-        };
-        let acc = if max_acc > 0.0 {
-            self.eta_acc * (self.eps_acc / max_acc).sqrt()
-        } else {
-            f64::INFINITY
-        };
-        let energy = if max_cooling > 0.0 {
-            self.k_u / max_cooling
-        } else {
-            f64::INFINITY
-        };
+        let [courant, div, acc, energy] = self.criteria(
+            stats.min_h_over_vsig,
+            stats.max_abs_div_v,
+            max_acc,
+            max_cooling,
+        );
         let dt = courant
             .min(div)
             .min(acc)
@@ -189,6 +179,48 @@ impl TimestepParams {
         .find(|&(v, _)| v == dt)
         .map_or(DtLimit::Growth, |(_, l)| l);
         (dt, limit)
+    }
+
+    /// The steps the four criteria allow, `[courant, divergence,
+    /// acceleration, energy]`, from `h / v_sig`, `|div v|` (the
+    /// compression the scheme's form counts), `|a|` (0: criterion off) and
+    /// `-du/dt / u` (0: not falling): of one particle, or the extremes
+    /// over all.
+    fn criteria(&self, h_over_vsig: f64, abs_div_v: f64, acc: f64, cooling: f64) -> [f64; 4] {
+        let courant = self.k_courant * h_over_vsig;
+        let div = if abs_div_v > 0.0 {
+            self.k_rho / abs_div_v
+        } else {
+            f64::INFINITY
+        };
+        let acc = if acc > 0.0 {
+            self.eta_acc * (self.eps_acc / acc).sqrt()
+        } else {
+            f64::INFINITY
+        };
+        let energy = if cooling > 0.0 {
+            self.k_u / cooling
+        } else {
+            f64::INFINITY
+        };
+        [courant, div, acc, energy]
+    }
+
+    /// One particle's own step: the smallest of the criteria of
+    /// [`dt_limited`](Self::dt_limited) with its own `h / v_sig`,
+    /// compression `|div v|`, `|a|` (0 without the acceleration criterion)
+    /// and cooling rate `-du/dt / u` (0 unless falling); no growth limit.
+    /// The global step is at most every particle's.
+    ///
+    /// ```
+    /// use sph_core::timestep::TimestepParams;
+    /// let p = TimestepParams::default();
+    /// assert_eq!(p.particle_dt(1.0, 0.0, 0.0, 0.0), 0.2);
+    /// assert_eq!(p.particle_dt(1.0, 1.0, 0.0, 0.0), 0.06);
+    /// ```
+    pub fn particle_dt(&self, h_over_vsig: f64, abs_div_v: f64, acc: f64, cooling: f64) -> f64 {
+        let [courant, div, acc, energy] = self.criteria(h_over_vsig, abs_div_v, acc, cooling);
+        courant.min(div).min(acc).min(energy)
     }
 
     /// The previous step the growth limit of step `step` (1 for the

@@ -501,6 +501,7 @@ fn forces(s: &mut Setup, gradients: Gradients, alpha: Option<&[f64]>) {
         ay: &mut p.ay,
         az: &mut p.az,
         du: &mut p.du,
+        criteria: None,
     };
     let mut factors = PairFactors::default();
     factors.fill(&state);

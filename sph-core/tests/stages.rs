@@ -294,6 +294,7 @@ fn compute_forces_conducting(
         ay: &mut p.ay,
         az: &mut p.az,
         du: &mut p.du,
+        criteria: None,
     };
     let n = state.rho.len();
     let mut grad: Vec<Vec<f64>> = match cleaning {

@@ -260,6 +260,7 @@ fn forces_with(s: &mut Setup, alpha: Alpha<'_>, volume: Volume, gradients: Gradi
         ay: &mut p.ay,
         az: &mut p.az,
         du: &mut p.du,
+        criteria: None,
     };
     momentum_energy_with(&kernel(), &s.bbox, state, &f, scheme, &s.list, rates);
 }

@@ -3,7 +3,7 @@
 //! limits, as means over steps 2..N (step 1 holds set-up costs). They feed
 //! `timings.csv` ([`super::timings`]) and the summary.
 
-use sph_core::{StepReport, STAGES};
+use sph_core::{StepReport, BIN_OFFSETS, STAGES};
 use std::collections::BTreeMap;
 
 /// Decomposition figures of a run (means over steps 2..N).
@@ -25,6 +25,25 @@ pub struct DomainSummary {
     pub sync_seconds_per_step: f64,
 }
 
+/// The time bins a block-step run would give the particles
+/// (`sphexa run --report-bins`, [`sph_core::HydroConfig::bin_report`]), over
+/// all steps: an estimate before block steps exist, without their limiter
+/// or longest step (so a lower bound of their updates).
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct BinSummary {
+    /// Entry `k`: particle-steps whose own step was at least `2^k` (below
+    /// the last entry less than `2^(k+1)`) times the global step.
+    pub particle_steps_by_offset: Vec<u64>,
+    /// Particle updates of this run (particles times steps).
+    pub global_updates: u64,
+    /// The updates if each particle advanced with its own step rounded
+    /// down to a power of two of the global one: the sum over steps and
+    /// particles of `2^-k`.
+    pub block_updates_estimate: f64,
+    /// `block_updates_estimate / global_updates`.
+    pub ratio: f64,
+}
+
 /// Sums of the per-step figures over steps 2..N, and the last step's.
 #[derive(Debug, Clone)]
 pub struct StageTotals {
@@ -34,6 +53,7 @@ pub struct StageTotals {
     timed_steps: u64,
     last_total: Option<f64>,
     limits: BTreeMap<&'static str, u64>,
+    bins: Option<BinSummary>,
 }
 
 impl StageTotals {
@@ -47,6 +67,7 @@ impl StageTotals {
             timed_steps: 0,
             last_total: None,
             limits: BTreeMap::new(),
+            bins: None,
         }
     }
 
@@ -74,6 +95,23 @@ impl StageTotals {
         (self.domain.owned_min, self.domain.owned_max) = (d.owned_min, d.owned_max);
         self.last_total = Some(r.times.total());
         *self.limits.entry(r.dt_limit.name()).or_default() += 1;
+        if let Some(counts) = r.bins {
+            let b = self.bins.get_or_insert_with(|| BinSummary {
+                particle_steps_by_offset: vec![0; BIN_OFFSETS],
+                ..BinSummary::default()
+            });
+            for (k, &c) in counts.iter().enumerate() {
+                b.particle_steps_by_offset[k] += c;
+                b.global_updates += c;
+                b.block_updates_estimate += c as f64 * 0.5f64.powi(k as i32);
+            }
+            b.ratio = b.block_updates_estimate / b.global_updates.max(1) as f64;
+        }
+    }
+
+    /// The bins the particles would take, where the run measured them.
+    pub fn bins(&self) -> Option<BinSummary> {
+        self.bins.clone()
     }
 
     /// How many steps each time-step criterion set.

@@ -24,6 +24,9 @@ pub(super) struct StepBuffers {
     /// volumes only).
     pub(super) xm: Vec<f64>,
     pub(super) kx: Vec<f64>,
+    /// Each particle's `h / v_sig` and compression (bin report only).
+    pub(super) h_over_vsig: Vec<f64>,
+    pub(super) compression: Vec<f64>,
 }
 
 impl StepBuffers {
@@ -35,7 +38,9 @@ impl StepBuffers {
                 + self.alpha_eff.capacity()
                 + self.grad_v.iter().map(Vec::capacity).sum::<usize>()
                 + self.xm.capacity()
-                + self.kx.capacity())
+                + self.kx.capacity()
+                + self.h_over_vsig.capacity()
+                + self.compression.capacity())
                 * 8
     }
 }

@@ -34,6 +34,12 @@ pub struct HydroConfig {
     pub bucket: usize,
     /// Self-gravity (tree multipoles; open boxes only), or none.
     pub gravity: Option<GravityParams>,
+    /// Measure the time bins a block-step run would give the particles:
+    /// each step computes every particle's own step
+    /// ([`TimestepParams::particle_dt`]) and reports in
+    /// [`StepReport::bins`](super::StepReport::bins) how many could take
+    /// `2^k` times the global step. The step and its results do not change.
+    pub bin_report: bool,
 }
 
 impl Default for HydroConfig {
@@ -47,6 +53,7 @@ impl Default for HydroConfig {
             curve: Curve::Hilbert,
             bucket: 16,
             gravity: None,
+            bin_report: false,
         }
     }
 }

@@ -56,7 +56,7 @@ mod stages;
 
 use buffers::StepBuffers;
 pub use config::HydroConfig;
-pub use report::{DomainStepStats, RunState, Stage, StageTimes, StepReport, STAGES};
+pub use report::{DomainStepStats, RunState, Stage, StageTimes, StepReport, BIN_OFFSETS, STAGES};
 use report::{StageClock, StepExtremes};
 
 /// The hydro pipeline of one rank with its reusable buffers. The domain
@@ -345,6 +345,10 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         };
         let dt = capped;
         self.dt_cap = f64::INFINITY;
+        let bins = self
+            .config
+            .bin_report
+            .then(|| self.bin_counts(p, owned.clone(), dt, guard));
         clock.lap(Stage::Timestep);
 
         let report = integrate(
@@ -393,6 +397,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 comm_seconds_max: ext.comm_seconds_max,
                 sync_seconds_max: ext.sync_seconds_max,
             },
+            bins,
         })
     }
 

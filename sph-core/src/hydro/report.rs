@@ -213,4 +213,12 @@ pub struct StepReport {
     pub energy_fallbacks: usize,
     /// Decomposition figures over all ranks.
     pub domain: DomainStepStats,
+    /// With [`HydroConfig::bin_report`](super::HydroConfig::bin_report):
+    /// entry `k` counts the particles (over all ranks) whose own step is
+    /// at least `2^k` times `dt` and, below the last entry, less than
+    /// `2^(k+1)` times.
+    pub bins: Option<[u64; BIN_OFFSETS]>,
 }
+
+/// The entries of [`StepReport::bins`].
+pub const BIN_OFFSETS: usize = 24;

@@ -1,6 +1,6 @@
 //! The stages of a step, in pipeline order.
 
-use super::report::{Stage, StageClock};
+use super::report::{Stage, StageClock, BIN_OFFSETS};
 use super::Hydro;
 use crate::av_switch::{
     balsara, iad_and_velocity_divergence, update_alpha, velocity_divergence, FlowState,
@@ -10,14 +10,14 @@ use crate::density::{density, pressure_energy_density, ve_density, xmass, Positi
 use crate::iad::iad_volumes;
 use crate::integrate::HUpdate;
 use crate::momentum::{
-    momentum_energy_with, Alpha, ArtificialStress, AvCleaning, HydroState, MomentumScheme,
-    MomentumStats, Rates, VolumeWeights,
+    momentum_energy_with, Alpha, ArtificialStress, AvCleaning, Criteria, HydroState,
+    MomentumScheme, MomentumStats, Rates, VolumeWeights,
 };
 use crate::neighbors::find_neighbors;
 use crate::scheme::{Viscosity, Volume};
 use crate::{CoreError, Particles};
 use rayon::prelude::*;
-use sph_comm::Communicator;
+use sph_comm::{Communicator, ReduceOp};
 use sph_gravity::{Decomposition, GravityStats};
 use sph_kernels::Kernel;
 use sph_tree::{BoundingBox, CompactNeighborList, NeighborStats};
@@ -174,13 +174,24 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
 
     /// Accelerations and du/dt of the owned particles, with the scheme's
     /// viscosity and volumes.
-    pub(super) fn momentum(&self, p: &mut Particles, bbox: &BoundingBox) -> MomentumStats {
+    pub(super) fn momentum(&mut self, p: &mut Particles, bbox: &BoundingBox) -> MomentumStats {
+        let n = p.len();
         let state = hydro_state!(p);
+        let (hv, comp) = (&mut self.buf.h_over_vsig, &mut self.buf.compression);
+        let criteria = self.config.bin_report.then(|| {
+            hv.resize(n, 0.0);
+            comp.resize(n, 0.0);
+            Criteria {
+                h_over_vsig: hv,
+                compression: comp,
+            }
+        });
         let rates = Rates {
             ax: &mut p.ax,
             ay: &mut p.ay,
             az: &mut p.az,
             du: &mut p.du,
+            criteria,
         };
         let s = self.config.scheme;
         let alpha = if s.balsara {
@@ -211,6 +222,60 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         };
         let (k, f, list) = (&self.kernel, &self.buf.factors, &self.list);
         momentum_energy_with(k, bbox, state, f, scheme, list, rates)
+    }
+
+    /// [`StepReport::bins`](super::StepReport::bins) of the step `dt` just
+    /// chosen: each owned particle's own step from the momentum stage's
+    /// criteria, its |a| where the acceleration criterion is on (gravity)
+    /// and its cooling rate where the pressure depends on `u` (`energy`),
+    /// counted by `floor(log2(dt_i / dt))`, over all ranks.
+    pub(super) fn bin_counts(
+        &self,
+        p: &Particles,
+        owned: Range<usize>,
+        dt: f64,
+        energy: bool,
+    ) -> [u64; BIN_OFFSETS] {
+        let ts = &self.config.timestep;
+        let (hv, comp) = (&self.buf.h_over_vsig, &self.buf.compression);
+        let gravity = self.gravity.is_some();
+        let mut counts = owned
+            .into_par_iter()
+            .map(|i| {
+                let acc = if gravity {
+                    (p.ax[i] * p.ax[i] + p.ay[i] * p.ay[i] + p.az[i] * p.az[i]).sqrt()
+                } else {
+                    0.0
+                };
+                let cooling = if energy && p.u[i] > 0.0 && p.du[i] < 0.0 {
+                    -p.du[i] / p.u[i]
+                } else {
+                    0.0
+                };
+                let own = ts.particle_dt(hv[i], comp[i], acc, cooling);
+                // The global step is at most every particle's: k >= 0.
+                let k = (own / dt).log2().floor();
+                if k >= (BIN_OFFSETS - 1) as f64 {
+                    BIN_OFFSETS - 1
+                } else if k >= 0.0 {
+                    k as usize
+                } else {
+                    0
+                }
+            })
+            .fold(
+                || [0u64; BIN_OFFSETS],
+                |mut c, k| {
+                    c[k] += 1;
+                    c
+                },
+            )
+            .reduce(
+                || [0u64; BIN_OFFSETS],
+                |a, b| std::array::from_fn(|k| a[k] + b[k]),
+            );
+        self.domain.comm().all_reduce(&mut counts, ReduceOp::Sum);
+        counts
     }
 
     /// Adds self-gravity to the owned particles' accelerations (when the

@@ -68,6 +68,18 @@ pub struct Rates<'a> {
     pub az: &'a mut [f64],
     /// du/dt.
     pub du: &'a mut [f64],
+    /// Each target's own time-step inputs, where asked for.
+    pub criteria: Option<Criteria<'a>>,
+}
+
+/// Each target's own time-step inputs ([`TimestepParams::particle_dt`](crate::timestep::TimestepParams::particle_dt)),
+/// indexed like the [`Rates`].
+#[derive(Debug)]
+pub struct Criteria<'a> {
+    /// `h / v_sig` with the form's signal velocity.
+    pub h_over_vsig: &'a mut [f64],
+    /// The compression `|div v|` the form's density criterion counts.
+    pub compression: &'a mut [f64],
 }
 
 /// What the time step needs from the momentum stage.
@@ -345,12 +357,18 @@ impl<'a, K: Kernel> MomentumRun<'a, K> {
         let n = s.rho.len();
         let r = self.nl.targets();
         let o = self.out;
-        let out = [
-            &mut o.ax[r.clone()],
-            &mut o.ay[r.clone()],
-            &mut o.az[r.clone()],
-            &mut o.du[r],
-        ];
+        let criteria = o
+            .criteria
+            .map(|c| [&mut c.h_over_vsig[r.clone()], &mut c.compression[r.clone()]]);
+        let out = (
+            [
+                &mut o.ax[r.clone()],
+                &mut o.ay[r.clone()],
+                &mut o.az[r.clone()],
+                &mut o.du[r],
+            ],
+            criteria,
+        );
         let stage = Momentum::<K, IAD, S, F, W> {
             flow: Flow::new(self.kernel, &flow_state, IAD),
             inv_h: &f.inv_h[..n],

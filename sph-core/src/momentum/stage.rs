@@ -81,7 +81,9 @@ where
     W: PressureWeights,
 {
     type Sums = (Targets<W::Target>, Sums);
-    type Out<'o> = [&'o mut [f64]; 4];
+    /// `a`, `du/dt`, and where asked for each target's `h / v_sig` and
+    /// compression.
+    type Out<'o> = ([&'o mut [f64]; 4], Option<[&'o mut [f64]; 2]>);
     type Stats = MomentumStats;
 
     #[inline(always)]
@@ -230,7 +232,7 @@ where
 
     #[inline(always)]
     fn finish(&self, g: &Group, (t, acc): Self::Sums, out: Self::Out<'_>) -> MomentumStats {
-        let [ax, ay, az, du] = out;
+        let ([ax, ay, az, du], criteria) = out;
         acc.a[0].store(ax);
         acc.a[1].store(ay);
         acc.a[2].store(az);
@@ -246,6 +248,12 @@ where
         for l in 0..g.valid {
             st.min_h_over_vsig = st.min_h_over_vsig.min(h_over_vsig[l]);
             st.max_abs_div_v = st.max_abs_div_v.max(F::compression(div[l]));
+        }
+        if let Some([hv, comp]) = criteria {
+            hv.copy_from_slice(&h_over_vsig[..g.valid]);
+            for (c, &d) in comp.iter_mut().zip(&div[..g.valid]) {
+                *c = F::compression(d);
+            }
         }
         st
     }

@@ -138,6 +138,13 @@ pub(crate) struct RunArgs {
     /// wait for it.
     #[arg(long)]
     pub(crate) rank_timings: bool,
+    /// Measure the time bins block (individual) time steps would give the
+    /// particles: every step computes each particle's own step from its
+    /// criteria; summary.json gets `bins` (particle-steps by how many
+    /// doublings of the global step each could take, and the updates a
+    /// block-step run would need at best). The run itself does not change.
+    #[arg(long)]
+    pub(crate) report_bins: bool,
     /// No progress output.
     #[arg(short, long)]
     pub(crate) quiet: bool,

@@ -147,6 +147,7 @@ fn execute(a: RunArgs) -> Result<(), AppError> {
     });
     config.neighbors.ng0 = a.ng0;
     config.neighbors.ngmax = a.ngmax;
+    config.bin_report = a.report_bins;
     let stop = match (a.steps, a.end_time) {
         (Some(s), _) => Stop::Steps(s),
         (None, Some(t)) => Stop::Time(t),

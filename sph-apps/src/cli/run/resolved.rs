@@ -70,6 +70,9 @@ pub(crate) fn resolved_config(
     if a.strict {
         set("strict", Value::Boolean(true));
     }
+    if a.report_bins {
+        set("report-bins", Value::Boolean(true));
+    }
     if a.rank_timings {
         set("rank-timings", Value::Boolean(true));
     }
