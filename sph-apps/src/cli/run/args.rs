@@ -2,7 +2,7 @@
 //! the value types of its options that are not `sph-core`'s (those take
 //! their values from [`sph_core::Choice`]).
 
-use super::scheme::{SchemeArgs, HEADING};
+use super::scheme_args::{SchemeArgs, HEADING};
 use crate::cli::parse::{
     case_names, choice, parse_checkpoint_every, parse_count, parse_courant, parse_duration,
     parse_field_list, parse_keep, parse_kernel, parse_non_negative, parse_positive, parse_side,

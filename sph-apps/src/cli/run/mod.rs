@@ -6,6 +6,7 @@ pub(crate) mod args;
 mod layers;
 mod resolved;
 pub(crate) mod scheme;
+mod scheme_args;
 
 use crate::cli::parse::CheckpointSpec;
 use crate::cli::start_threads;
