@@ -4,7 +4,7 @@
 use criterion::{criterion_main, BatchSize, Criterion};
 use sph_tree::{
     apply_permutation, compute_keys, Boundary, BoundingBox, CompactNeighborList, Curve, KeySorter,
-    NeighborList, NeighborSearch, Octree,
+    NeighborList, NeighborSearch, Octree, GROUP_LANES,
 };
 use std::hint::black_box;
 
@@ -123,6 +123,55 @@ fn benches(c: &mut Criterion) {
                 black_box(st.total)
             })
         });
+        // Block time steps: the grouped symmetric lists of the flagged groups
+        // only, 10% and 100% of them. The active 10% is one run of targets
+        // (compact in space along the curve, as a shock region is).
+        let groups = n.div_ceil(GROUP_LANES);
+        for percent in [10usize, 100] {
+            let on = groups * percent / 100;
+            let first = (groups - on) / 2;
+            let active: Vec<bool> = (0..groups).map(|g| g >= first && g < first + on).collect();
+            g.bench_function(format!("neighbors_100_compact_groups_{percent}pct"), |b| {
+                b.iter(|| {
+                    let st = grouped
+                        .find_compact_groups(
+                            &tree,
+                            &s.bbox,
+                            &s.x,
+                            &s.y,
+                            &s.z,
+                            &s.h,
+                            0..n,
+                            &active,
+                            &mut compact,
+                        )
+                        .unwrap();
+                    black_box(st.total)
+                })
+            });
+        }
+        // After a drift of up to 0.1 h per axis (in the periodic unit cube):
+        // refit the tree.
+        let moved: Vec<Vec<f64>> = [&s.x, &s.y, &s.z]
+            .iter()
+            .enumerate()
+            .map(|(d, c)| {
+                c.iter()
+                    .enumerate()
+                    .map(|(i, &v)| {
+                        let u = ((i * 7 + d * 13) % 101) as f64 / 50.0 - 1.0;
+                        (v + 0.1 * s.h[i] * u).rem_euclid(1.0)
+                    })
+                    .collect()
+            })
+            .collect();
+        g.bench_function("refit", |b| {
+            b.iter(|| {
+                tree.refit(&moved[0], &moved[1], &moved[2]).unwrap();
+                black_box(tree.num_nodes())
+            })
+        });
+        tree.rebuild(&s.keys, &s.x, &s.y, &s.z, 16).unwrap();
         let st = search
             .find(&tree, &s.bbox, &s.x, &s.y, &s.z, &s.h, 0..n, &mut list)
             .unwrap();

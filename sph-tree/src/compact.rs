@@ -10,7 +10,10 @@
 use std::ops::Range;
 
 /// Run-length-encoded neighbour lists of a contiguous range of targets.
-/// Built by [`NeighborSearch::find_compact`](crate::NeighborSearch::find_compact).
+/// Built by [`NeighborSearch::find_compact`](crate::NeighborSearch::find_compact),
+/// or for flagged groups of targets only by
+/// [`NeighborSearch::find_compact_groups`](crate::NeighborSearch::find_compact_groups)
+/// (the others then have empty lists).
 #[derive(Debug, Clone, Default)]
 pub struct CompactNeighborList {
     pub(crate) targets: Range<usize>,

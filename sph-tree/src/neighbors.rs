@@ -145,7 +145,7 @@ impl NeighborSearch {
         targets: Range<usize>,
         list: &mut NeighborList,
     ) -> Result<NeighborStats, TreeError> {
-        self.validate(tree, bbox, x, y, z, h, &targets)?;
+        self.validate(tree, bbox, x, y, z, h, &targets, None)?;
         let chunks = target_chunks(tree, &targets);
         let nt = targets.len();
         list.targets = targets.clone();
@@ -235,8 +235,111 @@ impl NeighborSearch {
         targets: Range<usize>,
         list: &mut CompactNeighborList,
     ) -> Result<NeighborStats, TreeError> {
-        self.validate(tree, bbox, x, y, z, h, &targets)?;
-        let chunks = target_chunks(tree, &targets);
+        self.compact(tree, bbox, [x, y, z, h], targets, None, list)
+    }
+
+    /// Like [`find_compact`](Self::find_compact), for the flagged groups of
+    /// targets only: `group_active[g]` says whether the targets
+    /// `targets.start + g * GROUP_LANES ..` (at most [`GROUP_LANES`] of
+    /// them, the last group possibly shorter) get their lists, so
+    /// `group_active.len()` is `targets.len().div_ceil(GROUP_LANES)`. The
+    /// groups are those of [`grouped`](Self::grouped) lists, whether the
+    /// search is grouped or not.
+    ///
+    /// A flagged group's lists and counts are bit for bit those
+    /// [`find_compact`](Self::find_compact) gives it (same entries, same
+    /// order), whatever the other flags and the thread count. An unflagged
+    /// group's lists are empty and its counts 0, so the list is indexed as
+    /// after a full search. The stats cover the flagged targets only.
+    ///
+    /// The cost follows the flagged groups: unflagged ones are only marked
+    /// empty, and a tree walk serves 64 consecutive targets, walked only if
+    /// one of their groups is flagged. Symmetric searches still take one
+    /// O(N) pass over the tree for each node's largest `h`. `h` is checked
+    /// for the flagged targets only.
+    ///
+    /// # Panics
+    ///
+    /// If `group_active` does not hold one flag per group, or for the
+    /// reasons [`find`](Self::find) panics.
+    ///
+    /// ```
+    /// use sph_tree::{Boundary, BoundingBox, CompactNeighborList, NeighborSearch, Octree,
+    ///                GROUP_LANES};
+    ///
+    /// // A 10^3 lattice in a periodic unit cube, x varying fastest.
+    /// let n = 10;
+    /// let (mut x, mut y, mut z) = (Vec::new(), Vec::new(), Vec::new());
+    /// for i in 0..n * n * n {
+    ///     x.push(((i % n) as f64 + 0.5) / n as f64);
+    ///     y.push(((i / n % n) as f64 + 0.5) / n as f64);
+    ///     z.push(((i / (n * n)) as f64 + 0.5) / n as f64);
+    /// }
+    /// let bbox = BoundingBox::cube(0.0, 1.0, Boundary::Periodic).unwrap();
+    /// // One leaf over the whole set: the tree needs sorted keys only.
+    /// let keys = vec![0u64; x.len()];
+    /// let tree = Octree::build(&keys, &x, &y, &z, x.len()).unwrap();
+    /// let h = vec![0.075; x.len()];
+    /// let search = NeighborSearch { grouped: true, ..Default::default() };
+    ///
+    /// // Lists for groups 0 and 5 only (targets 0..8 and 40..48).
+    /// let groups = x.len().div_ceil(GROUP_LANES);
+    /// let mut active = vec![false; groups];
+    /// active[0] = true;
+    /// active[5] = true;
+    /// let mut some = CompactNeighborList::new();
+    /// let st = search
+    ///     .find_compact_groups(&tree, &bbox, &x, &y, &z, &h, 0..x.len(), &active, &mut some)
+    ///     .unwrap();
+    /// assert_eq!(st.min_count, 19); // over the 16 flagged targets
+    ///
+    /// let mut all = CompactNeighborList::new();
+    /// search.find_compact(&tree, &bbox, &x, &y, &z, &h, 0..x.len(), &mut all).unwrap();
+    /// for i in 0..x.len() {
+    ///     if active[i / GROUP_LANES] {
+    ///         assert!(some.runs(i).eq(all.runs(i)));
+    ///         assert_eq!(some.count(i), all.count(i));
+    ///     } else {
+    ///         assert_eq!((some.runs(i).count(), some.count(i)), (0, 0));
+    ///     }
+    /// }
+    /// ```
+    pub fn find_compact_groups(
+        &self,
+        tree: &Octree,
+        bbox: &BoundingBox,
+        x: &[f64],
+        y: &[f64],
+        z: &[f64],
+        h: &[f64],
+        targets: Range<usize>,
+        group_active: &[bool],
+        list: &mut CompactNeighborList,
+    ) -> Result<NeighborStats, TreeError> {
+        assert_eq!(
+            group_active.len(),
+            targets.len().div_ceil(GROUP_LANES),
+            "one activity flag per group of {GROUP_LANES} targets"
+        );
+        self.compact(tree, bbox, [x, y, z, h], targets, Some(group_active), list)
+    }
+
+    /// [`find_compact`](Self::find_compact) (`active = None`) and
+    /// [`find_compact_groups`](Self::find_compact_groups).
+    fn compact(
+        &self,
+        tree: &Octree,
+        bbox: &BoundingBox,
+        [x, y, z, h]: [&[f64]; 4],
+        targets: Range<usize>,
+        active: Option<&[bool]>,
+        list: &mut CompactNeighborList,
+    ) -> Result<NeighborStats, TreeError> {
+        self.validate(tree, bbox, x, y, z, h, &targets, active)?;
+        let chunks = match active {
+            None => target_chunks(tree, &targets),
+            Some(a) => active_chunks(&targets, a),
+        };
         let nt = targets.len();
         let width = if self.grouped { GROUP_LANES } else { 1 };
         list.targets = targets.clone();
@@ -260,6 +363,8 @@ impl NeighborSearch {
         }
         let mut ctx = self.context(tree, bbox, [x, y, z, h], Some(&list.node_hmax_scratch));
         ctx.grouped = self.grouped;
+        ctx.active = active;
+        ctx.first_target = targets.start;
         let lens = || chunks.iter().map(|c| c.particles.len());
         let counts = split_by(&mut list.counts, lens());
         let starts = split_by(
@@ -285,7 +390,17 @@ impl NeighborSearch {
                 ctx.run_chunk(chunk, &mut sink);
                 sink.buf.shrink_to(sink.buf.len() + sink.buf.len() / 8);
             });
-        Ok(stats(&list.counts, usize::MAX, targets.start))
+        Ok(match active {
+            None => stats(&list.counts, usize::MAX, targets.start),
+            Some(a) => {
+                let mut st = Accumulated::default();
+                for (g, _) in a.iter().enumerate().filter(|(_, &on)| on) {
+                    let k = g * GROUP_LANES;
+                    st.add(&list.counts[k..(k + GROUP_LANES).min(nt)]);
+                }
+                st.finish()
+            }
+        })
     }
 
     /// Counts neighbours without storing them (for the smoothing-length
@@ -301,7 +416,7 @@ impl NeighborSearch {
         targets: Range<usize>,
         counts: &mut Vec<u32>,
     ) -> Result<NeighborStats, TreeError> {
-        self.validate(tree, bbox, x, y, z, h, &targets)?;
+        self.validate(tree, bbox, x, y, z, h, &targets, None)?;
         counts.clear();
         counts.resize(targets.len(), 0);
         let chunks = target_chunks(tree, &targets);
@@ -337,6 +452,8 @@ impl NeighborSearch {
             support: self.support,
             node_hmax: if self.symmetric { hmax } else { None },
             grouped: false,
+            active: None,
+            first_target: 0,
         }
     }
 
@@ -349,6 +466,7 @@ impl NeighborSearch {
         z: &[f64],
         h: &[f64],
         targets: &Range<usize>,
+        active: Option<&[bool]>,
     ) -> Result<(), TreeError> {
         crate::check_lengths(x, y, z, Some(("h", h.len())))?;
         assert_eq!(
@@ -358,7 +476,10 @@ impl NeighborSearch {
         );
         assert!(targets.end <= x.len(), "target range beyond the particles");
         let lengths = bbox.lengths();
-        for i in targets.clone() {
+        let checked = targets
+            .clone()
+            .filter(|i| active.is_none_or(|a| a[(i - targets.start) / GROUP_LANES]));
+        for i in checked {
             let r = self.support * h[i];
             if !r.is_finite() || r < 0.0 {
                 return Err(TreeError::NonFinite {
@@ -396,6 +517,13 @@ trait Sink {
     fn group(&mut self, first: usize, neighbors: &[u32], counts: &[u32]) {
         let _ = (first, neighbors, counts);
         unreachable!("only compact lists are grouped");
+    }
+    /// Targets `targets` (whole groups of `GROUP_LANES` counted from the
+    /// first target, or the short last one) are not searched: empty lists,
+    /// counts 0. Only compact lists skip targets.
+    fn skip(&mut self, targets: Range<usize>) {
+        let _ = targets;
+        unreachable!("only compact lists skip targets");
     }
 }
 
@@ -451,6 +579,14 @@ impl Sink for CompactSink<'_> {
         self.counts[k..k + counts.len()].copy_from_slice(counts);
         crate::compact::encode(self.buf, first, neighbors);
     }
+
+    #[inline]
+    fn skip(&mut self, targets: Range<usize>) {
+        let k = targets.start - self.base;
+        let end = self.buf.len() as u32;
+        self.start[k / self.width..(k + targets.len()).div_ceil(self.width)].fill(end);
+        self.counts[k..k + targets.len()].fill(0);
+    }
 }
 
 struct CountSink<'a> {
@@ -495,9 +631,21 @@ struct Context<'a> {
     node_hmax: Option<&'a [f64]>,
     /// One list per GROUP_LANES targets (compact lists only).
     grouped: bool,
+    /// Flags of the groups of GROUP_LANES targets counted from
+    /// `first_target` that are searched (compact lists only; `None`: all).
+    active: Option<&'a [bool]>,
+    first_target: usize,
 }
 
 impl Context<'_> {
+    /// Whether the group of `GROUP_LANES` targets starting at `first` is
+    /// searched.
+    #[inline]
+    fn is_active(&self, first: usize) -> bool {
+        self.active
+            .is_none_or(|a| a[(first - self.first_target) / GROUP_LANES])
+    }
+
     /// Searches the chunk in groups of `GROUP_SIZE` consecutive particles
     /// (compact in space, thanks to the curve): one tree walk per group finds
     /// the candidate nodes, then each particle of the group scans only those.
@@ -507,7 +655,11 @@ impl Context<'_> {
         let mut a = chunk.particles.start;
         while a < chunk.particles.end {
             let b = (a + GROUP_SIZE).min(chunk.particles.end);
-            self.search_group(a..b, &mut cands, &mut scratch, sink);
+            if (a..b).step_by(GROUP_LANES).any(|g| self.is_active(g)) {
+                self.search_group(a..b, &mut cands, &mut scratch, sink);
+            } else {
+                sink.skip(a..b);
+            }
             a = b;
         }
     }
@@ -528,7 +680,9 @@ impl Context<'_> {
             bbox.is_periodic(2),
         ];
         let support = self.support;
-        // Group box and largest search radius.
+        // Group box and largest search radius, over every target of the
+        // group, flagged or not: the candidates (and their shifts) are then
+        // the full search's, so flagged targets get its lists bit for bit.
         let mut glo = [f64::INFINITY; 3];
         let mut ghi = [f64::NEG_INFINITY; 3];
         let mut rgroup: f64 = 0.0;
@@ -614,63 +768,83 @@ impl Context<'_> {
         if S::STORE && scratch.len() < most {
             scratch.resize(most, 0);
         }
-        let symmetric = self.node_hmax.is_some();
-        if self.grouped {
-            let mut a = group.start;
-            while a < group.end {
-                let b = (a + GROUP_LANES).min(group.end);
+        // Search groups start on a multiple of GROUP_LANES from the first
+        // target, so activity flags cover whole sub-groups.
+        let mut a = group.start;
+        while a < group.end {
+            let b = (a + GROUP_LANES).min(group.end);
+            if !self.is_active(a) {
+                sink.skip(a..b);
+            } else if self.grouped {
                 self.scan_lanes(a..b, cands, scratch, sink);
-                a = b;
+            } else {
+                for i in a..b {
+                    self.scan_target(i, cands, scratch, sink);
+                }
             }
-            return;
+            a = b;
         }
-        for i in group {
-            let p = [x[i], y[i], z[i]];
-            let r = support * self.h[i];
-            let r2 = r * r;
-            let mut len = 0usize;
-            let mut own = 0usize;
-            for c in cands.iter() {
-                // Point-to-box distance against the (shifted) leaf box.
-                let mut d2 = 0.0;
-                for d in 0..3 {
-                    let g = (c.lo[d] - p[d]).max(p[d] - c.hi[d]);
-                    if g > 0.0 {
-                        d2 += g * g;
-                    }
+    }
+
+    /// The neighbours of target `i` among the candidates of its search
+    /// group.
+    #[inline]
+    fn scan_target<S: Sink>(
+        &self,
+        i: usize,
+        cands: &[Candidate],
+        scratch: &mut [u32],
+        sink: &mut S,
+    ) {
+        let (x, y, z) = (self.x, self.y, self.z);
+        let bbox = self.bbox;
+        let support = self.support;
+        let symmetric = self.node_hmax.is_some();
+        let p = [x[i], y[i], z[i]];
+        let r = support * self.h[i];
+        let r2 = r * r;
+        let mut len = 0usize;
+        let mut own = 0usize;
+        for c in cands.iter() {
+            // Point-to-box distance against the (shifted) leaf box.
+            let mut d2 = 0.0;
+            for d in 0..3 {
+                let g = (c.lo[d] - p[d]).max(p[d] - c.hi[d]);
+                if g > 0.0 {
+                    d2 += g * g;
                 }
-                let reach = r.max(c.r_node);
-                if c.exact_shift && d2 >= reach * reach {
-                    continue;
-                }
-                let q = if c.exact_shift {
-                    [p[0] - c.shift[0], p[1] - c.shift[1], p[2] - c.shift[2]]
+            }
+            let reach = r.max(c.r_node);
+            if c.exact_shift && d2 >= reach * reach {
+                continue;
+            }
+            let q = if c.exact_shift {
+                [p[0] - c.shift[0], p[1] - c.shift[1], p[2] - c.shift[2]]
+            } else {
+                p
+            };
+            for j in c.particles.clone() {
+                let dd = if c.exact_shift {
+                    let (dx, dy, dz) = (q[0] - x[j], q[1] - y[j], q[2] - z[j]);
+                    dx * dx + dy * dy + dz * dz
                 } else {
-                    p
+                    bbox.distance2(p, [x[j], y[j], z[j]])
                 };
-                for j in c.particles.clone() {
-                    let dd = if c.exact_shift {
-                        let (dx, dy, dz) = (q[0] - x[j], q[1] - y[j], q[2] - z[j]);
-                        dx * dx + dy * dy + dz * dz
-                    } else {
-                        bbox.distance2(p, [x[j], y[j], z[j]])
-                    };
-                    let inside = dd < r2;
-                    let listed = if symmetric {
-                        let rj = support * self.h[j];
-                        inside | (dd < rj * rj)
-                    } else {
-                        inside
-                    };
-                    if S::STORE {
-                        scratch[len] = j as u32;
-                    }
-                    len += usize::from(listed);
-                    own += usize::from(inside);
+                let inside = dd < r2;
+                let listed = if symmetric {
+                    let rj = support * self.h[j];
+                    inside | (dd < rj * rj)
+                } else {
+                    inside
+                };
+                if S::STORE {
+                    scratch[len] = j as u32;
                 }
+                len += usize::from(listed);
+                own += usize::from(inside);
             }
-            sink.particle(i, &scratch[..if S::STORE { len } else { 0 }], own);
         }
+        sink.particle(i, &scratch[..if S::STORE { len } else { 0 }], own);
     }
 
     /// The grouped form of the per-target scan of [`search_group`](Self::search_group):
@@ -783,6 +957,57 @@ fn target_chunks(_tree: &Octree, targets: &Range<usize>) -> Vec<Chunk> {
             particles: a..(a + PARTICLES_PER_CHUNK).min(targets.end),
         })
         .collect()
+}
+
+/// Splits the targets for a search of the flagged groups: runs of search
+/// groups (`GROUP_SIZE` targets counted from the first target, so the same
+/// as a full search's) holding about `PARTICLES_PER_CHUNK` flagged targets,
+/// at most `SKIP_SPAN` targets long. Depends on the flags only (never on
+/// the thread count).
+fn active_chunks(targets: &Range<usize>, active: &[bool]) -> Vec<Chunk> {
+    const SKIP_SPAN: usize = 16 * PARTICLES_PER_CHUNK;
+    let mut chunks = Vec::new();
+    let (mut a, mut flagged) = (targets.start, 0);
+    let mut g = 0; // first group of the next search group
+    for s in (targets.start..targets.end).step_by(GROUP_SIZE) {
+        let e = (s + GROUP_SIZE).min(targets.end);
+        let g_end = (e - targets.start).div_ceil(GROUP_LANES);
+        flagged += active[g..g_end].iter().filter(|&&f| f).count() * GROUP_LANES;
+        g = g_end;
+        if flagged >= PARTICLES_PER_CHUNK || e - a >= SKIP_SPAN || e == targets.end {
+            chunks.push(Chunk { particles: a..e });
+            (a, flagged) = (e, 0);
+        }
+    }
+    chunks
+}
+
+/// Count statistics accumulated over pieces of the counts.
+#[derive(Default)]
+struct Accumulated {
+    min: Option<u32>,
+    max: u32,
+    total: usize,
+}
+
+impl Accumulated {
+    fn add(&mut self, counts: &[u32]) {
+        for &c in counts {
+            self.min = Some(self.min.map_or(c, |m| m.min(c)));
+            self.max = self.max.max(c);
+            self.total += c as usize;
+        }
+    }
+
+    fn finish(self) -> NeighborStats {
+        NeighborStats {
+            min_count: self.min.unwrap_or(0) as usize,
+            max_count: self.max as usize,
+            total: self.total,
+            over_cap: 0,
+            first_over_cap: None,
+        }
+    }
 }
 
 fn stats(counts: &[u32], cap: usize, start: usize) -> NeighborStats {

@@ -109,6 +109,45 @@ impl Octree {
         Ok(())
     }
 
+    /// Recomputes every node's tight box from moved positions `x, y, z`
+    /// (in the tree's particle order), keeping the topology: the particle
+    /// order, each node's particle range, children, levels and keys stay
+    /// those of the last build. O(N), parallel within each level, no
+    /// allocation once the tree is built.
+    ///
+    /// Searches over a refitted tree are exact: they find every pair within
+    /// the search radius of the current positions, since each node's box is
+    /// again the tight box of its particles (on periodic axes too: a
+    /// particle wrapped to the other side of the box only makes its nodes'
+    /// boxes larger). What no longer holds is the space-filling-curve
+    /// order: [`key`](Self::key) is the cell of the build, no longer the
+    /// cell of the particles' new positions, and the boxes grow and overlap
+    /// as particles drift apart, so searches slow down until the next
+    /// rebuild. The boxes equal those of a fresh [`build`](Self::build) with
+    /// the old keys and the new positions.
+    ///
+    /// ```
+    /// use sph_tree::Octree;
+    /// let keys: Vec<u64> = (0..100u64).map(|i| i << 40).collect();
+    /// let mut x: Vec<f64> = (0..100).map(|i| i as f64).collect();
+    /// let mut t = Octree::build(&keys, &x, &x, &x, 8).unwrap();
+    /// assert_eq!(t.node_box(0), ([0.0; 3], [99.0; 3]));
+    /// let leaves = t.leaves().to_vec();
+    /// x[99] = 150.0; // particle 99 drifts away
+    /// t.refit(&x, &x, &x).unwrap();
+    /// assert_eq!(t.node_box(0), ([0.0; 3], [150.0; 3]));
+    /// assert_eq!(t.leaves(), &leaves[..]); // same topology
+    /// let last = *leaves.last().unwrap();
+    /// assert_eq!(t.node_box(last).1, [150.0; 3]);
+    /// ```
+    pub fn refit(&mut self, x: &[f64], y: &[f64], z: &[f64]) -> Result<(), TreeError> {
+        crate::check_lengths(x, y, z, Some(("the tree", self.num_particles())))?;
+        if !self.first.is_empty() {
+            self.compute_boxes(x, y, z);
+        }
+        Ok(())
+    }
+
     fn push_node(&mut self, first: u32, count: u32, key: u64, level: u8) {
         self.first.push(first);
         self.count.push(count);
