@@ -1,7 +1,9 @@
 //! Cost of one `Domain::sync` (steady state: particles already in place,
 //! as in a time step) on one rank and on 4 in-process ranks, and of one
-//! halo exchange of 4 fields on 4 ranks. In-process ranks share this
-//! machine's cores: compare the figures with each other, not with MPI.
+//! halo exchange of 4 fields on 4 ranks: `exchange`, `exchange_where` for a
+//! 10% subset and for every particle, and `exchange_reverse_min` of one `u8`
+//! per particle. In-process ranks share this machine's cores: compare the
+//! figures with each other, not with MPI.
 
 use criterion::{criterion_main, BenchmarkId, Criterion};
 use sph_comm::{run_ranks, Communicator, SerialComm};
@@ -47,6 +49,44 @@ fn bench(c: &mut Criterion) {
                     let t = Instant::now();
                     for _ in 0..iters {
                         d.sync(&mut p, &mut bbox).unwrap();
+                    }
+                    t.elapsed()
+                });
+                times.into_iter().max().unwrap()
+            });
+        });
+    }
+    g.finish();
+
+    let mut g = c.benchmark_group("exchange");
+    g.sample_size(10).measurement_time(Duration::from_secs(5));
+    let side = 50usize;
+    let n = side * side * side;
+    for kind in ["exchange", "where 10%", "where 100%", "reverse_min u8"] {
+        g.bench_function(BenchmarkId::new(kind, n), |b| {
+            b.iter_custom(|iters| {
+                let times = run_ranks(4, |comm| {
+                    let mut p = lattice(side, comm.rank(), 4);
+                    let mut bbox = BoundingBox::cube(0.0, 1.0, Boundary::Periodic).unwrap();
+                    let mut d = Domain::new(&comm, DomainConfig::default()).unwrap();
+                    d.sync(&mut p, &mut bbox).unwrap();
+                    let len = p.id.len();
+                    let mut fields = vec![vec![1.0f64; len]; 4];
+                    let mut bins = vec![7u8; len];
+                    let ids = &p.id;
+                    comm.barrier();
+                    let t = Instant::now();
+                    for _ in 0..iters {
+                        let mut f: Vec<&mut [f64]> =
+                            fields.iter_mut().map(|v| v.as_mut_slice()).collect();
+                        match kind {
+                            "exchange" => d.exchange(&mut f).unwrap(),
+                            "where 10%" => d
+                                .exchange_where(&mut f, |i| ids[i].is_multiple_of(10))
+                                .unwrap(),
+                            "where 100%" => d.exchange_where(&mut f, |_| true).unwrap(),
+                            _ => d.exchange_reverse_min(&mut bins).unwrap(),
+                        }
                     }
                     t.elapsed()
                 });

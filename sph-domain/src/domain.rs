@@ -1,13 +1,15 @@
 //! The distributed domain: one `sync` per step puts every rank's particles
 //! in global SFC order (migration to the owners of balanced key ranges) and
 //! appends the halos its owned particles interact with; `exchange` then
-//! refreshes any halo fields point to point.
+//! refreshes any halo fields point to point, `exchange_where` those of a
+//! subset of the owned particles, and `exchange_reverse_min` takes halo
+//! values back to their owners, keeping the minimum.
 
 use crate::global_tree::{Assignment, GlobalTree};
 use crate::halo::candidate_cells;
 use crate::{halo_slot, DomainError, ParticleFields};
 use rayon::prelude::*;
-use sph_comm::{Communicator, ReduceOp};
+use sph_comm::{Communicator, Plain, ReduceOp};
 use sph_tree::{compute_keys, Boundary, BoundingBox, Curve, KeySorter};
 use std::ops::Range;
 use std::time::Instant;
@@ -387,6 +389,249 @@ impl<C: Communicator> Domain<C> {
             for (k, &slot) in peer.recv.iter().enumerate() {
                 for (f, field) in fields.iter_mut().enumerate() {
                     field[slot as usize] = buf[k * nf + f];
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// [`exchange`](Self::exchange) for a subset: copies the owners' values
+    /// of `fields` into the halo slots of the owned particles `i` (local
+    /// indices) with `send(i)` true, and leaves every other halo slot as it
+    /// is. Collective, like `exchange`.
+    ///
+    /// Only the owner decides what travels: a message holds, per particle
+    /// sent, its position in the sender's halo list for the receiving rank
+    /// (which the receiver maps to its halo slot through the plan of the
+    /// last sync), then its values, so the receiver needs no prior
+    /// knowledge of which particles come. Peers with nothing selected get
+    /// no message. With `send` always true the halo slots receive exactly
+    /// what `exchange` gives them (the same bits; `exchange` is cheaper, as
+    /// it sends no indices). On one rank there are no halos (periodic
+    /// images are folds, not copies) and nothing happens.
+    ///
+    /// `send` is called only with owned indices, twice for each peer the
+    /// particle is a halo of (a count sizes each message, then the values
+    /// are packed), so it must be a pure predicate (an activity flag, a
+    /// time-bin test).
+    ///
+    /// # Errors
+    /// [`DomainError::Comm`] if the exchange fails; [`DomainError::UnexpectedPeer`],
+    /// [`DomainError::Mismatch`] or [`DomainError::HaloIndex`] for a message
+    /// that does not fit the plan of the last sync (which ranks calling
+    /// with different field counts also produce).
+    ///
+    /// # Panics
+    /// If a field is shorter than the local arrays of the last sync.
+    ///
+    /// # Examples
+    ///
+    /// Two in-process ranks; only even ids are refreshed:
+    ///
+    /// ```
+    /// use sph_comm::{run_ranks, Communicator};
+    /// use sph_domain::{Domain, DomainConfig, Points};
+    /// use sph_tree::{Boundary, BoundingBox};
+    ///
+    /// run_ranks(2, |comm| {
+    ///     let mut cloud = Points::default();
+    ///     for i in (comm.rank() as u64..1000).step_by(2) {
+    ///         let f = |k: u64| ((i * k) % 1000) as f64 / 1000.0;
+    ///         cloud.push(i, [f(7), f(13), f(31)], 0.05);
+    ///     }
+    ///     let mut bbox = BoundingBox::cube(0.0, 1.0, Boundary::Periodic).unwrap();
+    ///     let mut domain = Domain::new(&comm, DomainConfig::default()).unwrap();
+    ///     let owned = domain.sync(&mut cloud, &mut bbox).unwrap();
+    ///     // Owners hold their id, halos -1.
+    ///     let mut q: Vec<f64> = (0..cloud.id.len())
+    ///         .map(|i| if owned.contains(&i) { cloud.id[i] as f64 } else { -1.0 })
+    ///         .collect();
+    ///     let ids = &cloud.id;
+    ///     domain
+    ///         .exchange_where(&mut [q.as_mut_slice()], |i| ids[i] % 2 == 0)
+    ///         .unwrap();
+    ///     for i in (0..ids.len()).filter(|i| !owned.contains(i)) {
+    ///         let want = if ids[i] % 2 == 0 { ids[i] as f64 } else { -1.0 };
+    ///         assert_eq!(q[i], want);
+    ///     }
+    /// });
+    /// ```
+    ///
+    /// On one rank it does nothing:
+    ///
+    /// ```
+    /// use sph_comm::SerialComm;
+    /// use sph_domain::{Domain, DomainConfig, Points};
+    /// use sph_tree::{Boundary, BoundingBox};
+    ///
+    /// let mut cloud = Points::default();
+    /// for i in 0..100u64 {
+    ///     cloud.push(i, [(i % 10) as f64 / 10.0, (i / 10) as f64 / 10.0, 0.5], 0.1);
+    /// }
+    /// let mut bbox = BoundingBox::cube(0.0, 1.0, Boundary::Periodic).unwrap();
+    /// let mut domain = Domain::new(SerialComm::new(), DomainConfig::default()).unwrap();
+    /// domain.sync(&mut cloud, &mut bbox).unwrap();
+    /// let mut q = vec![1.0; 100];
+    /// domain.exchange_where(&mut [q.as_mut_slice()], |_| true).unwrap();
+    /// assert_eq!(q, vec![1.0; 100]);
+    /// ```
+    pub fn exchange_where(
+        &mut self,
+        fields: &mut [&mut [f64]],
+        send: impl Fn(usize) -> bool,
+    ) -> Result<(), DomainError> {
+        if self.comm.size() == 1 {
+            return Ok(());
+        }
+        let nf = fields.len();
+        // Per particle: its index in the peer's list, then its values.
+        let words = nf + 1;
+        let mut sends: Vec<(usize, Vec<u64>)> = Vec::new();
+        for q in &self.peers {
+            // Counted first, so the buffer is allocated once at its size.
+            let count = q.send.iter().filter(|&&i| send(i as usize)).count();
+            if count == 0 {
+                continue;
+            }
+            let mut buf = Vec::with_capacity(count * words);
+            for (k, &i) in q.send.iter().enumerate() {
+                if send(i as usize) {
+                    buf.push(k as u64);
+                    buf.extend(fields.iter().map(|f| f[i as usize].to_bits()));
+                }
+            }
+            sends.push((q.rank, buf));
+        }
+        self.stats.bytes_sent += sends.iter().map(|(_, b)| b.len() as u64 * 8).sum::<u64>();
+        let t = Instant::now();
+        let received = self.comm.sparse_exchange(&sends)?;
+        self.stats.comm_seconds += t.elapsed().as_secs_f64();
+        drop(sends);
+        for (r, buf) in received {
+            let peer = self
+                .peers
+                .iter()
+                .find(|q| q.rank == r)
+                .ok_or(DomainError::UnexpectedPeer(r))?;
+            if buf.len() % words != 0 {
+                return Err(DomainError::Mismatch {
+                    peer: r,
+                    expected: buf.len() - buf.len() % words,
+                    got: buf.len(),
+                });
+            }
+            for chunk in buf.chunks_exact(words) {
+                let slot = usize::try_from(chunk[0])
+                    .ok()
+                    .and_then(|k| peer.recv.get(k))
+                    .ok_or(DomainError::HaloIndex {
+                        peer: r,
+                        index: chunk[0],
+                        halos: peer.recv.len(),
+                    })?;
+                for (field, &v) in fields.iter_mut().zip(&chunk[1..]) {
+                    field[*slot as usize] = f64::from_bits(v);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The reverse of a halo exchange, reducing by the minimum: every rank
+    /// sends the values in its halo slots of `field` back to their owners,
+    /// and each owned particle keeps the minimum of its own value and the
+    /// values of all its halo copies. Halo slots are left as they are.
+    /// Collective, like [`exchange`](Self::exchange); a no-op on one rank.
+    ///
+    /// Made for requests written into neighbours, such as the smallest time
+    /// bin a particle's neighbours allow it (block time steps' wake-up).
+    /// Integer elements (`u8`, `u32`, `u64`, ...: `Ord`), so the result is
+    /// the same whatever the order in which copies arrive. Each peer's
+    /// message holds all its halos of this rank, in the order of the last
+    /// sync's plan, so no indices travel.
+    ///
+    /// # Errors
+    /// [`DomainError::Comm`] if the exchange fails; [`DomainError::UnexpectedPeer`]
+    /// or [`DomainError::Mismatch`] for a message that does not fit the
+    /// plan of the last sync.
+    ///
+    /// # Panics
+    /// If `field` is shorter than the local arrays of the last sync.
+    ///
+    /// # Examples
+    ///
+    /// Two in-process ranks: owners hold 9, the halos of rank `r` hold
+    /// `r + 1`; afterwards exactly the owned particles that are halos
+    /// elsewhere are lowered, to the other rank's value:
+    ///
+    /// ```
+    /// use sph_comm::{run_ranks, Communicator};
+    /// use sph_domain::{Domain, DomainConfig, Points};
+    /// use sph_tree::{Boundary, BoundingBox};
+    ///
+    /// let counts = run_ranks(2, |comm| {
+    ///     let mut cloud = Points::default();
+    ///     for i in (comm.rank() as u64..1000).step_by(2) {
+    ///         let f = |k: u64| ((i * k) % 1000) as f64 / 1000.0;
+    ///         cloud.push(i, [f(7), f(13), f(31)], 0.05);
+    ///     }
+    ///     let mut bbox = BoundingBox::cube(0.0, 1.0, Boundary::Periodic).unwrap();
+    ///     let mut domain = Domain::new(&comm, DomainConfig::default()).unwrap();
+    ///     let owned = domain.sync(&mut cloud, &mut bbox).unwrap();
+    ///     let halo = comm.rank() as u8 + 1;
+    ///     let mut bins: Vec<u8> = (0..cloud.id.len())
+    ///         .map(|i| if owned.contains(&i) { 9 } else { halo })
+    ///         .collect();
+    ///     domain.exchange_reverse_min(&mut bins).unwrap();
+    ///     let other = (1 - comm.rank()) as u8 + 1;
+    ///     assert!(bins[owned.clone()].iter().all(|&b| b == 9 || b == other));
+    ///     let lowered = bins[owned.clone()].iter().filter(|&&b| b < 9).count();
+    ///     (lowered, cloud.id.len() - owned.len())
+    /// });
+    /// // Each particle is a halo on at most the one other rank.
+    /// let lowered: usize = counts.iter().map(|c| c.0).sum();
+    /// let halos: usize = counts.iter().map(|c| c.1).sum();
+    /// assert_eq!(lowered, halos);
+    /// assert!(halos > 0);
+    /// ```
+    pub fn exchange_reverse_min<T: Plain + Ord>(
+        &mut self,
+        field: &mut [T],
+    ) -> Result<(), DomainError> {
+        if self.comm.size() == 1 {
+            return Ok(());
+        }
+        let sends: Vec<(usize, Vec<T>)> = self
+            .peers
+            .iter()
+            .filter(|q| !q.recv.is_empty())
+            .map(|q| (q.rank, q.recv.iter().map(|&s| field[s as usize]).collect()))
+            .collect();
+        self.stats.bytes_sent += sends
+            .iter()
+            .map(|(_, b)| (b.len() * std::mem::size_of::<T>()) as u64)
+            .sum::<u64>();
+        let t = Instant::now();
+        let received = self.comm.sparse_exchange(&sends)?;
+        self.stats.comm_seconds += t.elapsed().as_secs_f64();
+        drop(sends);
+        for (r, buf) in received {
+            let peer = self
+                .peers
+                .iter()
+                .find(|q| q.rank == r)
+                .ok_or(DomainError::UnexpectedPeer(r))?;
+            if buf.len() != peer.send.len() {
+                return Err(DomainError::Mismatch {
+                    peer: r,
+                    expected: peer.send.len(),
+                    got: buf.len(),
+                });
+            }
+            for (&i, &v) in peer.send.iter().zip(buf.iter()) {
+                let own = &mut field[i as usize];
+                if v < *own {
+                    *own = v;
                 }
             }
         }

@@ -52,6 +52,17 @@ pub enum DomainError {
         /// Values received.
         got: usize,
     },
+    /// A subset halo message naming a halo the sender does not send to
+    /// this rank (see [`Domain::exchange_where`](crate::Domain::exchange_where)).
+    #[error("halo message from rank {peer} names halo {index}, but that rank sends {halos}")]
+    HaloIndex {
+        /// Sending rank.
+        peer: usize,
+        /// The index received (position in the sender's halo list).
+        index: u64,
+        /// Number of halos the peer sends to this rank.
+        halos: usize,
+    },
     /// Communication failed.
     #[error(transparent)]
     Comm(#[from] CommError),

@@ -2,7 +2,11 @@
 //! domain library): a replicated global octree whose leaf counts are summed
 //! with one all-reduce, contiguous SFC key ranges per rank balanced by
 //! count, migration of particles to their owners, halo discovery (periodic
-//! aware) and point-to-point halo exchange of any set of fields.
+//! aware) and point-to-point halo exchange of any set of fields: of every
+//! halo ([`Domain::exchange`]), of the halos of a subset chosen by the owner
+//! ([`Domain::exchange_where`], for block time steps' active particles),
+//! and back from the halos to their owners by minimum
+//! ([`Domain::exchange_reverse_min`]).
 //!
 //! After [`Domain::sync`] a rank's arrays hold its halos and owned particles
 //! in ascending (key, id) order, the same relative order as on one rank, so
