@@ -64,6 +64,28 @@ fn unknown_kernel_is_named_with_the_allowed_kernels() {
 }
 
 #[test]
+fn equations_of_state_are_named_with_the_accepted_forms() {
+    for value in ["ideal:1", "gas:1", "isothermal:x", "polytropic:1"] {
+        let e = refused(&["sedov", "--eos", value, "--steps", "1", "-q"]);
+        assert_mentions(&e, &[value, "--eos", "ideal:GAMMA", "isothermal:C0"]);
+    }
+    // Each with what it cannot be used with, or on which case.
+    let e = refused(&[
+        "sedov",
+        "--eos",
+        "isothermal:1",
+        "--conductivity",
+        "1",
+        "--steps",
+        "1",
+        "-q",
+    ]);
+    assert_mentions(&e, &["isothermal:1", "conductivity"]);
+    let e = refused(&["sedov", "--eos", "tait-ref:1", "--steps", "1", "-q"]);
+    assert_mentions(&e, &["tait-ref:1", "square-patch", "sedov"]);
+}
+
+#[test]
 fn neighbour_counts_must_be_ordered() {
     let e = refused(&[
         "sedov", "--ng0", "200", "--ngmax", "150", "--steps", "1", "-q",

@@ -2,6 +2,8 @@
 //! internal energy.
 
 use rayon::prelude::*;
+use std::fmt;
+use std::str::FromStr;
 
 /// Tait pressure and sound speed about `(rho0, p0)`.
 #[inline]
@@ -145,5 +147,128 @@ impl Eos {
                 *p = pp;
                 *c = cc;
             });
+    }
+}
+
+/// The accepted forms of an equation of state written as text.
+pub const EOS_FORMS: &str =
+    "ideal:GAMMA (GAMMA > 1), isothermal:C0, polytropic:K:GAMMA, tait:RHO0:C0:P0, tait-ref:C0 (positive C0, K, GAMMA, RHO0; finite P0)";
+
+impl fmt::Display for Eos {
+    /// The text [`Eos::from_str`] reads back (`ideal:1.4`,
+    /// `isothermal:1`, `polytropic:K:GAMMA`, `tait:RHO0:C0:P0`,
+    /// `tait-ref:C0`), each number written so that it parses to the same
+    /// bits.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Eos::IdealGas { gamma } => write!(f, "ideal:{gamma}"),
+            Eos::Isothermal { c0 } => write!(f, "isothermal:{c0}"),
+            Eos::Polytropic { k, gamma } => write!(f, "polytropic:{k}:{gamma}"),
+            Eos::Tait { rho0, c0, p0 } => write!(f, "tait:{rho0}:{c0}:{p0}"),
+            Eos::TaitReferenced { c0 } => write!(f, "tait-ref:{c0}"),
+        }
+    }
+}
+
+impl FromStr for Eos {
+    type Err = crate::CoreError;
+
+    /// Reads `ideal:GAMMA`, `isothermal:C0`, `polytropic:K:GAMMA`,
+    /// `tait:RHO0:C0:P0` or `tait-ref:C0` and checks the values
+    /// ([`Eos::validate`]).
+    ///
+    /// ```
+    /// use sph_core::Eos;
+    /// let e: Eos = "isothermal:1".parse().unwrap();
+    /// assert_eq!(e, Eos::Isothermal { c0: 1.0 });
+    /// assert_eq!(e.to_string().parse::<Eos>().unwrap(), e);
+    /// assert!("ideal:1".parse::<Eos>().is_err());
+    /// assert!("stiff:7".parse::<Eos>().unwrap_err().to_string().contains("isothermal:C0"));
+    /// ```
+    ///
+    /// # Errors
+    /// [`CoreError::Invalid`](crate::CoreError::Invalid) naming the text
+    /// and the accepted forms.
+    fn from_str(text: &str) -> Result<Self, Self::Err> {
+        let bad = |why: &str| {
+            crate::CoreError::Invalid(format!(
+                "equation of state '{text}': {why}; accepted: {EOS_FORMS}"
+            ))
+        };
+        let mut parts = text.trim().split(':');
+        let kind = parts.next().unwrap_or("");
+        let numbers: Vec<f64> = parts
+            .map(|x| x.trim().parse::<f64>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| bad("its parameters must be numbers"))?;
+        let want = match kind {
+            "ideal" | "isothermal" | "tait-ref" => 1,
+            "polytropic" => 2,
+            "tait" => 3,
+            _ => return Err(bad("unknown kind")),
+        };
+        if numbers.len() != want {
+            return Err(bad(&format!("'{kind}' takes {want} number(s)")));
+        }
+        let eos = match kind {
+            "ideal" => Eos::IdealGas { gamma: numbers[0] },
+            "isothermal" => Eos::Isothermal { c0: numbers[0] },
+            "tait-ref" => Eos::TaitReferenced { c0: numbers[0] },
+            "polytropic" => Eos::Polytropic {
+                k: numbers[0],
+                gamma: numbers[1],
+            },
+            _ => Eos::Tait {
+                rho0: numbers[0],
+                c0: numbers[1],
+                p0: numbers[2],
+            },
+        };
+        eos.validate().map_err(|_| bad("a value is out of range"))?;
+        Ok(eos)
+    }
+}
+
+#[cfg(test)]
+mod text_tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Every valid equation of state written as text reads back to
+        /// the same bits.
+        #[test]
+        fn text_round_trips(a in 1e-6f64..1e6, b in 1e-6f64..1e3, c in -1e6f64..1e6, kind in 0usize..5) {
+            let eos = match kind {
+                0 => Eos::IdealGas { gamma: 1.0 + b },
+                1 => Eos::Isothermal { c0: a },
+                2 => Eos::Polytropic { k: a, gamma: b },
+                3 => Eos::Tait { rho0: a, c0: b, p0: c },
+                _ => Eos::TaitReferenced { c0: a },
+            };
+            let back: Eos = eos.to_string().parse().unwrap();
+            prop_assert_eq!(back, eos);
+        }
+    }
+
+    #[test]
+    fn bad_text_is_named_with_the_forms() {
+        for text in [
+            "",
+            "ideal",
+            "ideal:x",
+            "ideal:1",
+            "ideal:1.4:2",
+            "polytropic:1",
+            "isothermal:-1",
+            "tait:1:1",
+            "gas:1",
+        ] {
+            let e = text.parse::<Eos>().unwrap_err().to_string();
+            assert!(
+                e.contains(&format!("'{text}'")) && e.contains("ideal:GAMMA"),
+                "{e}"
+            );
+        }
     }
 }

@@ -36,7 +36,7 @@ impl Physics {
 
 /// What a run changes in a case's scheme: a preset (`--scheme`), the
 /// scheme options of [`SCHEME_OPTIONS`] (`--gradients`, `--alpha`, ...),
-/// and the run's `--softening`, `--courant` and `--first-step`; `None`
+/// and the run's `--softening`, `--courant`, `--first-step` and `--eos`; `None`
 /// keeps the case's choice. The default overrides nothing.
 ///
 /// ```
@@ -60,6 +60,8 @@ pub struct SchemeOverrides {
     /// The first step (over the run's, `TimestepParams::first_step`,
     /// default [`FirstStep::Ramp`]).
     pub first_step: Option<FirstStep>,
+    /// The equation of state (over the case's, [`Physics::eos`]).
+    pub eos: Option<Eos>,
 }
 
 impl SchemeOverrides {
@@ -112,7 +114,7 @@ impl SchemeOverrides {
     /// whatever the caller passed.
     pub fn apply(&self, scheme: Scheme, physics: Physics, config: &mut HydroConfig) {
         config.scheme = self.over(scheme);
-        config.eos = physics.eos;
+        config.eos = self.eos.unwrap_or(physics.eos);
         config.gravity = physics.softening.map(|s| GravityParams {
             softening: self.softening.unwrap_or(s),
             ..config.gravity.unwrap_or_default()

@@ -147,6 +147,13 @@ pub(crate) fn case_names() -> PossibleValuesParser {
     )
 }
 
+/// An equation of state (`--eos`): the forms of [`sph_core::Eos`]'s
+/// `FromStr` (`tait-ref` only on the case that has it: see
+/// `check_eos`).
+pub(crate) fn parse_eos(s: &str) -> Result<sph_core::Eos, String> {
+    s.parse::<sph_core::Eos>().map_err(|e| e.to_string())
+}
+
 /// Particles per side, within [`SIDE_RANGE`].
 pub(crate) fn parse_side(s: &str) -> Result<usize, String> {
     let (lo, hi) = SIDE_RANGE;

@@ -81,6 +81,22 @@ impl HydroConfig {
     pub fn validate(&self) -> Result<(), CoreError> {
         self.scheme.validate()?;
         self.eos.validate()?;
+        if !self.eos.uses_internal_energy() {
+            // Both read u as a thermal energy the EOS does not have.
+            let clash = if self.scheme.volume == crate::Volume::PressureEnergy {
+                Some("pressure-energy volumes (X = m u)")
+            } else if self.scheme.conductivity.is_some() {
+                Some("artificial conductivity (it diffuses u)")
+            } else {
+                None
+            };
+            if let Some(what) = clash {
+                return Err(CoreError::Invalid(format!(
+                    "equation of state {}: pressure does not depend on u, so {what} cannot be used with it; choose other volumes or conductivity 0, or an ideal gas",
+                    self.eos
+                )));
+            }
+        }
         if self.bucket == 0 {
             return Err(CoreError::Invalid("bucket size must be at least 1".into()));
         }

@@ -5,12 +5,13 @@
 use super::scheme_args::{SchemeArgs, HEADING};
 use crate::cli::parse::{
     case_names, choice, parse_checkpoint_every, parse_count, parse_courant, parse_duration,
-    parse_field_list, parse_keep, parse_kernel, parse_non_negative, parse_positive, parse_side,
-    parse_steps, parse_threads, parse_times, snapshot_fields_help, CheckpointSpec, FieldList,
-    Times,
+    parse_eos, parse_field_list, parse_keep, parse_kernel, parse_non_negative, parse_positive,
+    parse_side, parse_steps, parse_threads, parse_times, snapshot_fields_help, CheckpointSpec,
+    FieldList, Times,
 };
 use clap::{Args, Parser, ValueEnum};
 use sph_core::timestep::FirstStep;
+use sph_core::Eos;
 use sph_kernels::KernelChoice;
 use std::path::PathBuf;
 
@@ -117,6 +118,13 @@ pub(crate) struct RunArgs {
     /// Leave out the grad-h correction (Omega = 1): `--grad-h off`.
     #[arg(long, conflicts_with = "grad_h", help_heading = HEADING)]
     pub(crate) no_grad_h: bool,
+    /// Equation of state over the case's: `ideal:GAMMA` (GAMMA > 1),
+    /// `isothermal:C0`, `polytropic:K:GAMMA`, `tait:RHO0:C0:P0` (default:
+    /// the case's, see `sphexa cases`). With `isothermal` and `polytropic`
+    /// pressure does not read u (u is still integrated; pressure-energy
+    /// volumes and conductivity are refused with them).
+    #[arg(long, value_name = "SPEC", value_parser = parse_eos)]
+    pub(crate) eos: Option<Eos>,
     /// Self-gravity: opening angle theta of the tree, a positive number
     /// (cases with gravity only).
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true,

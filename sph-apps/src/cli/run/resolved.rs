@@ -53,6 +53,7 @@ pub(crate) fn resolved_config(
         }),
     );
     set("courant", Value::Float(config.timestep.k_courant));
+    set("eos", Value::String(config.eos.to_string()));
     set(
         "first-step",
         Value::String(config.timestep.first_step.name().into()),

@@ -6,7 +6,7 @@
 use super::args::RunArgs;
 use crate::cases::{Scheme, SchemeOverrides, Setting, SCHEME_OPTIONS};
 use crate::AppError;
-use sph_core::PRESETS;
+use sph_core::{Eos, PRESETS};
 
 /// Checks the scheme the run will use (the case's with the command line's
 /// overrides) before the solver sees it, in the options' terms.
@@ -33,6 +33,22 @@ pub(crate) fn check_scheme(s: &Scheme, a: &RunArgs, case: &str) -> Result<(), Ap
         .map_err(|e| AppError::Usage(format!("scheme options: {e}")))
 }
 
+/// Refuses `--eos tait-ref:C0` on a case whose own equation of state is
+/// not referenced: each particle's reference pressure comes from the case
+/// that has it (the square patch).
+pub(crate) fn check_eos(a: &RunArgs, case: &dyn crate::cases::Case) -> Result<(), AppError> {
+    match a.eos {
+        Some(e @ Eos::TaitReferenced { .. }) if !case.physics().eos.needs_reference() => {
+            Err(AppError::Usage(format!(
+                "--eos {e}: tait-ref takes each particle's reference pressure from a case that sets it (square-patch); case '{}' does not; accepted: {}",
+                case.name(),
+                sph_core::eos::EOS_FORMS
+            )))
+        }
+        _ => Ok(()),
+    }
+}
+
 /// What the command line changes in the case's scheme.
 pub(crate) fn scheme_overrides(a: &RunArgs) -> Result<SchemeOverrides, AppError> {
     let preset = match &a.scheme {
@@ -54,6 +70,7 @@ pub(crate) fn scheme_overrides(a: &RunArgs) -> Result<SchemeOverrides, AppError>
         softening: a.softening,
         courant: a.courant,
         first_step: a.first_step,
+        eos: a.eos,
     };
     if a.no_grad_h {
         return overrides.with("grad-h", Setting::Switch(false));
