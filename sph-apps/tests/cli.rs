@@ -69,7 +69,9 @@ fn equations_of_state_are_named_with_the_accepted_forms() {
         let e = refused(&["sedov", "--eos", value, "--steps", "1", "-q"]);
         assert_mentions(&e, &[value, "--eos", "ideal:GAMMA", "isothermal:C0"]);
     }
-    // Each with what it cannot be used with, or on which case.
+    // Each with what it cannot be used with, or on which case; refused
+    // before anything is written.
+    let out = scratch("eos-refused");
     let e = refused(&[
         "sedov",
         "--eos",
@@ -79,9 +81,21 @@ fn equations_of_state_are_named_with_the_accepted_forms() {
         "--steps",
         "1",
         "-q",
+        "--out",
+        out.to_str().unwrap(),
     ]);
     assert_mentions(&e, &["isothermal:1", "conductivity"]);
-    let e = refused(&["sedov", "--eos", "tait-ref:1", "--steps", "1", "-q"]);
+    assert!(!out.join("config.toml").exists());
+    let e = refused(&[
+        "sedov",
+        "--eos",
+        "tait-ref:1",
+        "--steps",
+        "1",
+        "-q",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert_mentions(&e, &["tait-ref:1", "square-patch", "sedov"]);
 }
 
@@ -180,7 +194,11 @@ fn evrard_below_the_smallest_glass_block_runs() {
 
 #[test]
 fn unknown_scheme_is_named_with_the_presets() {
-    let e = refused(&["sedov", "--scheme", "sph-ve", "--steps", "1", "-q"]);
+    let out = scratch("unknown-scheme");
+    let out = out.to_str().unwrap();
+    let e = refused(&[
+        "sedov", "--scheme", "sph-ve", "--steps", "1", "-q", "--out", out,
+    ]);
     let mut words = vec!["--scheme", "sph-ve"];
     words.extend(sph_core::PRESETS.iter().map(|p| p.0));
     assert_mentions(&e, &words);
@@ -293,7 +311,9 @@ fn a_build_without_mpi_refuses_more_than_one_rank() {
 
 #[test]
 fn a_wind_shock_box_too_thin_for_the_kernel_is_refused_with_the_least_size() {
-    let e = refused(&["wind-shock", "-n", "16", "--steps", "1", "-q"]);
+    let out = scratch("wind-shock-too-few");
+    let out = out.to_str().unwrap();
+    let e = refused(&["wind-shock", "-n", "16", "--steps", "1", "-q", "--out", out]);
     assert_mentions(&e, &["wind-shock", "16", "ng0 = 100", "-n 28"]);
 }
 

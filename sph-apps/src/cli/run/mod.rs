@@ -183,7 +183,7 @@ fn execute(a: RunArgs) -> Result<(), AppError> {
         }
     };
     let mut scene = case.setup_share(side, config, &overrides, share, &layout)?;
-    scene.config.scheme.validate()?;
+    scene.config.validate()?;
     // A checkpoint, or a snapshot as initial conditions, replaces the
     // case's particles (each rank reads only its share).
     let loaded = match &a.restart {
