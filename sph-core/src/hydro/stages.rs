@@ -247,11 +247,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 } else {
                     0.0
                 };
-                let cooling = if energy && p.u[i] > 0.0 && p.du[i] < 0.0 {
-                    -p.du[i] / p.u[i]
-                } else {
-                    0.0
-                };
+                let cooling = cooling_rate(p, i, energy);
                 let own = ts.particle_dt(hv[i], comp[i], acc, cooling);
                 // The global step is at most every particle's: k >= 0.
                 let k = (own / dt).log2().floor();
@@ -323,12 +319,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             .into_par_iter()
             .map(|i| {
                 let h_next = p.h[i] * hu.factor(p.nc[i]);
-                // (Read only with `energy`: the fields may be empty.)
-                let cooling = if energy && p.u[i] > 0.0 && p.du[i] < 0.0 {
-                    -p.du[i] / p.u[i]
-                } else {
-                    0.0
-                };
+                let cooling = cooling_rate(p, i, energy);
                 if !any_open {
                     return [0.0, 0.0, h_next, cooling];
                 }
@@ -550,5 +541,17 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             &mut p.c[r],
         );
         Ok(())
+    }
+}
+
+/// Particle `i`'s cooling rate `-du/dt / u` for the energy criterion: 0
+/// unless `energy` (the pressure reads `u`; only then are the fields read)
+/// and `u > 0` is falling.
+#[inline]
+fn cooling_rate(p: &Particles, i: usize, energy: bool) -> f64 {
+    if energy && p.u[i] > 0.0 && p.du[i] < 0.0 {
+        -p.du[i] / p.u[i]
+    } else {
+        0.0
     }
 }
