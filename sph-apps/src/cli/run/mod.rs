@@ -172,7 +172,7 @@ fn execute(a: RunArgs) -> Result<(), AppError> {
     // overrides; each rank builds only its share of the particles.
     let share = cases::Share { rank, ranks };
     let overrides = scheme::scheme_overrides(&a)?;
-    scheme::check_scheme(&overrides.over(case.default_scheme()), &a, case.name())?;
+    scheme::check_scheme(&overrides, case.default_scheme(), case.name())?;
     scheme::check_eos(&a, case)?;
     let layout = if a.lattice {
         cases::Layout::Lattice

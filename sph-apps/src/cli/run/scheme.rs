@@ -10,11 +10,12 @@ use sph_core::{Eos, PRESETS};
 
 /// Checks the scheme the run will use (the case's with the command line's
 /// overrides) before the solver sees it, in the options' terms.
-pub(crate) fn check_scheme(s: &Scheme, a: &RunArgs, case: &str) -> Result<(), AppError> {
+pub(crate) fn check_scheme(o: &SchemeOverrides, base: Scheme, case: &str) -> Result<(), AppError> {
+    let s = o.over(base);
     if let Some(sw) = s.switches() {
         if s.alpha() < sw.alpha_min || s.alpha().is_nan() {
-            let given = |key| a.scheme_options.get(key).is_some();
-            let origin = match (given("alpha"), given("av-switches"), &a.scheme) {
+            let given = |key| o.get(key).is_some();
+            let origin = match (given("alpha"), given("av-switches"), o.preset) {
                 (true, true, _) => "--av-switches on",
                 (true, false, Some(_)) => "the scheme given by --scheme",
                 (true, false, None) => "the scheme of case '{case}'",

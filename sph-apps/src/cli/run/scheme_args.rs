@@ -15,17 +15,6 @@ pub(crate) const HEADING: &str = "Scheme (over the case's, or the --scheme prese
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct SchemeArgs(pub(crate) [Option<Setting>; SCHEME_OPTIONS.len()]);
 
-impl SchemeArgs {
-    /// The value given for `key`, if any.
-    pub(crate) fn get(&self, key: &str) -> Option<Setting> {
-        SCHEME_OPTIONS
-            .iter()
-            .zip(&self.0)
-            .find(|(o, _)| o.key == key)
-            .and_then(|(_, v)| *v)
-    }
-}
-
 /// The argument id of an option: its key with `_` for `-`, as clap's
 /// derive names the other options' fields.
 fn id(key: &str) -> String {
