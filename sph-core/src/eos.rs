@@ -92,6 +92,33 @@ impl Eos {
         matches!(self, Eos::IdealGas { .. })
     }
 
+    /// The specific internal energy a barotropic EOS gives a density: the
+    /// work done compressing the gas from density 1 (code units),
+    /// `e = int_1^rho P / rho'^2 drho'`: `c0^2 ln rho` (isothermal),
+    /// `K (rho^(G-1) - 1) / (G-1)` (polytropic; `K ln rho` at `G = 1`).
+    /// `None` where the pressure reads `u` or a reference state (ideal gas,
+    /// Tait): there `u` is the particles' own.
+    ///
+    /// The energy equation integrates `du/dt = P / rho^2 Drho/Dt` plus the
+    /// dissipative heat, so starting from `u = e(rho)` keeps `u - e(rho)`
+    /// equal to the heat made, and `E_kin + sum m u` is the conserved total.
+    ///
+    /// ```
+    /// use sph_core::Eos;
+    /// let iso = Eos::Isothermal { c0: 2.0 };
+    /// assert_eq!(iso.energy(1.0), Some(0.0));
+    /// assert!((iso.energy(std::f64::consts::E).unwrap() - 4.0).abs() < 1e-15);
+    /// assert_eq!(Eos::IdealGas { gamma: 1.4 }.energy(2.0), None);
+    /// ```
+    pub fn energy(&self, rho: f64) -> Option<f64> {
+        match *self {
+            Eos::Isothermal { c0 } => Some(c0 * c0 * rho.ln()),
+            Eos::Polytropic { k, gamma: 1.0 } => Some(k * rho.ln()),
+            Eos::Polytropic { k, gamma } => Some(k * (rho.powf(gamma - 1.0) - 1.0) / (gamma - 1.0)),
+            _ => None,
+        }
+    }
+
     /// Whether the EOS needs a per-particle reference state.
     pub fn needs_reference(&self) -> bool {
         matches!(self, Eos::TaitReferenced { .. })

@@ -256,6 +256,9 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         self.density(p, bbox)?;
         clock.lap(Stage::Density);
         self.eos(p, owned.clone())?;
+        if step == 1 {
+            self.calibrate_energy(p, owned.clone());
+        }
         clock.lap(Stage::Eos);
         self.exchange_thermo(p)?;
         clock.lap(Stage::Halos);

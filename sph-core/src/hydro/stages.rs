@@ -542,6 +542,22 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         );
         Ok(())
     }
+
+    /// At a run's first step, a barotropic EOS (isothermal, polytropic)
+    /// sets each owned particle's `u` to the compression energy of its
+    /// density ([`Eos::energy`](crate::Eos::energy)), so that `E_int` means
+    /// something and `u - e(rho)` is the heat made since. A restart starts
+    /// past step 1 and keeps the stored `u`.
+    pub(super) fn calibrate_energy(&self, p: &mut Particles, owned: Range<usize>) {
+        let eos = self.config.eos;
+        if eos.energy(1.0).is_none() {
+            return;
+        }
+        p.u[owned.clone()]
+            .par_iter_mut()
+            .zip(p.rho[owned].par_iter())
+            .for_each(|(u, &rho)| *u = eos.energy(rho).unwrap_or(*u));
+    }
 }
 
 /// Particle `i`'s cooling rate `-du/dt / u` for the energy criterion: 0
