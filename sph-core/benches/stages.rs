@@ -1,6 +1,7 @@
 //! Hot paths of sph-core on 1e5 particles (a perturbed 46^3 lattice in a
 //! periodic box, ~100 neighbours): density + grad-h, IAD, momentum-energy
-//! (constant and per-particle viscosity), AV switches.
+//! (constant and per-particle viscosity), AV switches; and the stirring
+//! field on 32^3 random points.
 
 // criterion_group! defines a public function without docs.
 #![allow(missing_docs)]
@@ -14,6 +15,7 @@ use sph_core::iad::iad;
 use sph_core::momentum::{
     momentum_energy, momentum_energy_switched, Gradients, HydroState, PairFactors, Rates,
 };
+use sph_core::stirring::{Mt19937, StirParams, Stirring};
 use sph_core::{Eos, FieldSet, Particles};
 use sph_kernels::{FastKernel, Sinc};
 use sph_tree::{
@@ -224,5 +226,26 @@ fn benches(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(stage_benches, benches);
+/// The stirring acceleration (112 mode entries) at 32^3 random points.
+fn stirring(c: &mut Criterion) {
+    let bbox = BoundingBox::cube(-0.5, 0.5, Boundary::Periodic).unwrap();
+    let mut stir = Stirring::new(StirParams::default(), &bbox).unwrap();
+    stir.advance(1e-4);
+    let n = 32 * 32 * 32;
+    let mut g = Mt19937::new(7);
+    let mut coord = || (0..n).map(|_| g.next_canonical() - 0.5).collect::<Vec<_>>();
+    let (x, y, z) = (coord(), coord(), coord());
+    let (mut ax, mut ay, mut az) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let mut group = c.benchmark_group("stirring_32c");
+    group.sample_size(20);
+    group.bench_function("accelerate", |b| {
+        b.iter(|| {
+            stir.accelerate(&x, &y, &z, &mut ax, &mut ay, &mut az);
+            black_box(ax[0])
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(stage_benches, benches, stirring);
 criterion_main!(stage_benches);

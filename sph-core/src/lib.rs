@@ -16,6 +16,7 @@
 //! | integer time line and bins of block time steps | [`timeline`] |
 //! | Press / Adams-Bashforth integrator, h update | [`integrate`] |
 //! | conserved quantities | [`conserved`] |
+//! | turbulence driving (not yet used by the solver) | [`stirring`] |
 //!
 //! [`Hydro`] chains them into one time step with reusable buffers.
 //!
@@ -69,6 +70,7 @@ pub mod neighbors;
 pub mod pair_loop;
 mod particles;
 pub mod scheme;
+pub mod stirring;
 pub mod timeline;
 pub mod timestep;
 
