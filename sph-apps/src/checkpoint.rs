@@ -16,7 +16,9 @@
 //!   the integrator's `dt_{n-1}`), the box, `h_next_max` (the largest h
 //!   after the last update, which the next step's halos use; NaN before the
 //!   first step), `sphexa_kind` = `checkpoint`, `case`, and `config`: the
-//!   run's resolved configuration as TOML (what `--restart` runs with).
+//!   run's resolved configuration as TOML (what `--restart` runs with);
+//!   a stirred run adds [`EXTERNAL_WORK`], [`STIR_PHASES`] and
+//!   [`STIR_RNG`] ([`StirState`]).
 //!
 //! Everything is stored in full `f64`/`u64` precision, so nothing is lost.
 //!
@@ -147,6 +149,36 @@ pub fn snapshot(
     snap
 }
 
+/// Attribute: the stirring's work up to the checkpoint's time (stirred
+/// runs only; 0 when absent).
+pub const EXTERNAL_WORK: &str = "external_work";
+/// Attribute: the stirring's OU phases (stirred runs only).
+pub const STIR_PHASES: &str = "stir_phases";
+/// Attribute: the stirring's random-number generator state, 625 exact
+/// integers (stirred runs only).
+pub const STIR_RNG: &str = "stir_rng";
+
+/// The driving state of a stirred run, as a checkpoint holds it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StirState {
+    /// OU phases ([`sph_core::stirring::Stirring::phases`]).
+    pub phases: Vec<f64>,
+    /// Generator state ([`sph_core::stirring::Stirring::rng_state`]).
+    pub rng: Vec<f64>,
+}
+
+impl StirState {
+    /// The attributes a checkpoint of a stirred run carries: the work
+    /// done so far (`work`) and the driving state of `s`.
+    pub fn attrs(s: &sph_core::stirring::Stirring, work: f64) -> Vec<(String, Attr)> {
+        vec![
+            (EXTERNAL_WORK.into(), Attr::F64(work)),
+            (STIR_PHASES.into(), Attr::F64Array(s.phases().to_vec())),
+            (STIR_RNG.into(), Attr::F64Array(s.rng_state())),
+        ]
+    }
+}
+
 /// A checkpoint as read by one rank: its share of the particles and what
 /// the whole run continues from.
 #[derive(Debug)]
@@ -165,6 +197,8 @@ pub struct Loaded {
     pub config: Option<String>,
     /// The case, if stored.
     pub case: Option<String>,
+    /// The driving state of a stirred run.
+    pub stirring: Option<StirState>,
 }
 
 /// Splits `FILE[:STEP]` into the file and the step, if given (`FILE` is
@@ -257,11 +291,33 @@ pub fn load<C: Communicator>(comm: &C, spec: &str) -> Result<Loaded, AppError> {
         Some(Attr::F64(h)) if h.is_finite() => Some(*h),
         _ => None,
     };
+    let external_work = match rows.attr(EXTERNAL_WORK) {
+        Some(Attr::F64(w)) if w.is_finite() => *w,
+        Some(other) => {
+            return Err(bad(format!(
+                "{EXTERNAL_WORK} is {other:?}, not a finite number"
+            )))
+        }
+        None => 0.0,
+    };
+    let stirring = match (rows.attr(STIR_PHASES), rows.attr(STIR_RNG)) {
+        (Some(Attr::F64Array(phases)), Some(Attr::F64Array(rng))) => Some(StirState {
+            phases: phases.clone(),
+            rng: rng.clone(),
+        }),
+        (None, None) => None,
+        _ => {
+            return Err(bad(format!(
+                "its stirring state is incomplete or mistyped ({STIR_PHASES} and {STIR_RNG} must both be f64 arrays)"
+            )))
+        }
+    };
     let state = RunState {
         step: rows.step,
         t: rows.time,
         dt_prev: rows.dt,
         h_next_max,
+        external_work,
     };
     let bbox = snapshot::bounding_box(&rows.bbox).map_err(|e| bad(format!("its box: {e}")))?;
     let total = usize::try_from(total)
@@ -273,6 +329,7 @@ pub fn load<C: Communicator>(comm: &C, spec: &str) -> Result<Loaded, AppError> {
         total,
         config: text("config"),
         case: text("case"),
+        stirring,
         rows,
     })
 }

@@ -67,6 +67,7 @@ fn fixture() -> &'static Fixture {
             t: 0.0125,
             dt_prev: 1.5e-4,
             h_next_max: Some(0.21),
+            external_work: 0.0,
         };
         let attrs = [
             (

@@ -44,6 +44,20 @@ impl Conserved {
         extra: [f64; E],
         comm: &C,
     ) -> (Self, [f64; E]) {
+        let (c, extra, []) = Self::compute_with(p, owned, extra, [], comm);
+        (c, extra)
+    }
+
+    /// As [`compute`](Self::compute), with the rank's exact partial sums
+    /// `sums` (of per-particle terms, so that their totals do not depend on
+    /// the rank count) reduced in the same all-reduce.
+    pub fn compute_with<C: Communicator, const E: usize, const S: usize>(
+        p: &Particles,
+        owned: Range<usize>,
+        extra: [f64; E],
+        sums_in: [ExactSum; S],
+        comm: &C,
+    ) -> (Self, [f64; E], [f64; S]) {
         let chunks = owned.len().div_ceil(CHUNK);
         let with_phi = !p.phi.is_empty();
         let mut sums: Vec<ExactSum> = (0..chunks)
@@ -83,6 +97,7 @@ impl Conserved {
                 .iter()
                 .map(|&e| std::iter::once(e).collect::<ExactSum>()),
         );
+        sums.extend(sums_in);
         ExactSum::all_reduce_many(&mut sums, comm);
         let v: Vec<f64> = sums.iter().map(ExactSum::value).collect();
         let c = Conserved {
@@ -93,6 +108,10 @@ impl Conserved {
             momentum: [v[3], v[4], v[5]],
             angular_momentum: [v[6], v[7], v[8]],
         };
-        (c, std::array::from_fn(|k| v[SUMS + k]))
+        (
+            c,
+            std::array::from_fn(|k| v[SUMS + k]),
+            std::array::from_fn(|k| v[SUMS + E + k]),
+        )
     }
 }

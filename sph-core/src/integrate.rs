@@ -61,6 +61,14 @@ pub struct IntegrateReport {
     pub energy_fallbacks: usize,
 }
 
+/// A velocity component at the start of a step from the Press history:
+/// the last displacement over the last step plus the kick of the second
+/// half of that step, `dX / dt_prev + a dt_prev / 2`.
+#[inline]
+pub fn velocity_now(displacement: f64, a: f64, dt_prev: f64) -> f64 {
+    displacement / dt_prev + a * (0.5 * dt_prev)
+}
+
 /// Advances the particles of `range` by `dt` (the previous step was `dt_prev`), wraps
 /// positions into periodic boxes and updates h (when `h_update` is given)
 /// from the neighbour counts `p.nc`. With `energy_guard`, a negative
@@ -77,7 +85,6 @@ pub fn integrate(
     step: u64,
 ) -> Result<IntegrateReport, CoreError> {
     let (ax, ay, az, du, nc, id) = (&p.ax, &p.ay, &p.az, &p.du, &p.nc, &p.id);
-    let half_prev = 0.5 * dt_prev;
     let result: Result<usize, CoreError> = (
         p.x[range.clone()].par_iter_mut(),
         p.y[range.clone()].par_iter_mut(),
@@ -102,7 +109,7 @@ pub fn integrate(
             let dpos = [dx, dy, dz];
             let mut newp = [0.0; 3];
             for k in 0..3 {
-                let v_n = *dpos[k] / dt_prev + a[k] * half_prev;
+                let v_n = velocity_now(*dpos[k], a[k], dt_prev);
                 let step_k = (v_n + 0.5 * a[k] * dt) * dt;
                 newp[k] = *pos[k] + step_k;
                 *dpos[k] = step_k;

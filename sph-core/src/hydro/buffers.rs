@@ -27,6 +27,9 @@ pub(super) struct StepBuffers {
     /// Each particle's `h / v_sig` and compression (bin report only).
     pub(super) h_over_vsig: Vec<f64>,
     pub(super) compression: Vec<f64>,
+    /// The stirring acceleration of the owned particles (stirred runs
+    /// only), net impulse removed.
+    pub(super) stir: [Vec<f64>; 3],
 }
 
 impl StepBuffers {
@@ -40,7 +43,8 @@ impl StepBuffers {
                 + self.xm.capacity()
                 + self.kx.capacity()
                 + self.h_over_vsig.capacity()
-                + self.compression.capacity())
+                + self.compression.capacity()
+                + self.stir.iter().map(Vec::capacity).sum::<usize>())
                 * 8
     }
 }

@@ -4,6 +4,7 @@ use crate::eos::Eos;
 use crate::integrate::HUpdate;
 use crate::neighbors::NeighborParams;
 use crate::scheme::Scheme;
+use crate::stirring::StirParams;
 use crate::timestep::TimestepParams;
 use crate::{CoreError, FieldSet};
 use sph_gravity::GravityParams;
@@ -40,6 +41,10 @@ pub struct HydroConfig {
     /// [`StepReport::bins`](super::StepReport::bins) how many could take
     /// `2^k` times the global step. The step and its results do not change.
     pub bin_report: bool,
+    /// Turbulence driving ([`crate::stirring`]) in a periodic cube, or
+    /// none: each step adds the stirring acceleration, net impulse
+    /// removed, and reports its work.
+    pub stirring: Option<StirParams>,
 }
 
 impl Default for HydroConfig {
@@ -54,6 +59,7 @@ impl Default for HydroConfig {
             bucket: 16,
             gravity: None,
             bin_report: false,
+            stirring: None,
         }
     }
 }
@@ -96,6 +102,9 @@ impl HydroConfig {
                     self.eos
                 )));
             }
+        }
+        if let Some(stir) = &self.stirring {
+            stir.validate()?;
         }
         if self.bucket == 0 {
             return Err(CoreError::Invalid("bucket size must be at least 1".into()));

@@ -9,6 +9,7 @@ use crate::conserved::Conserved;
 use crate::density::Positions;
 use crate::integrate::integrate;
 use crate::momentum::{Gradients, HydroState, MomentumStats};
+use crate::stirring::Stirring;
 use crate::timestep::DtLimit;
 use crate::{CoreError, Particles};
 use sph_comm::{Communicator, SerialComm};
@@ -53,6 +54,7 @@ mod buffers;
 mod config;
 mod report;
 mod stages;
+mod stir;
 
 use buffers::StepBuffers;
 pub use config::HydroConfig;
@@ -76,6 +78,11 @@ pub struct Hydro<K: Kernel, C: Communicator = SerialComm> {
     gravity: Option<DistributedGravity>,
     gravity_tree: Octree,
     field: GravityField,
+    /// The turbulence driving's state (built at the first step, from the
+    /// box), when the configuration stirs.
+    stirring: Option<Stirring>,
+    /// Work done by the stirring up to `t`.
+    external_work: f64,
     step: u64,
     t: f64,
     dt_prev: f64,
@@ -138,6 +145,8 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 .map_err(CoreError::GravitySetup)?,
             field: GravityField::new(),
             gravity_tree: Octree::default(),
+            stirring: None,
+            external_work: 0.0,
             step: 0,
             t: t0,
             dt_prev: dt0,
@@ -189,6 +198,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             t: self.t,
             dt_prev: self.dt_prev,
             h_next_max: self.next_h_max,
+            external_work: self.external_work,
         }
     }
 
@@ -201,6 +211,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         self.t = s.t;
         self.dt_prev = s.dt_prev;
         self.next_h_max = s.h_next_max;
+        self.external_work = s.external_work;
         self.dt_cap = f64::INFINITY;
     }
 
@@ -286,22 +297,27 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             // Adams-Bashforth needs du_{n-1}; the first step uses du_0.
             p.du_prev[owned.clone()].copy_from_slice(&p.du[owned.clone()]);
         }
+        self.stir(p, bbox, owned.clone())?;
+        clock.lap(Stage::Stirring);
         let acc_max = self.add_gravity(p, bbox, owned.clone(), step)?;
         clock.lap(Stage::Gravity);
 
-        // One global sum: conserved quantities, neighbour and domain totals.
+        // One global sum: conserved quantities, neighbour and domain totals,
+        // and the stirring's work terms.
         let sync = self.domain.stats();
-        let (conserved, [nc_total, over_cap, halos_total, bytes_sent]) = Conserved::compute(
-            p,
-            owned.clone(),
-            [
-                neighbours.total as f64,
-                neighbours.over_cap as f64,
-                sync.halos as f64,
-                sync.bytes_sent as f64,
-            ],
-            self.domain.comm(),
-        );
+        let (conserved, [nc_total, over_cap, halos_total, bytes_sent], work_terms) =
+            Conserved::compute_with(
+                p,
+                owned.clone(),
+                [
+                    neighbours.total as f64,
+                    neighbours.over_cap as f64,
+                    sync.halos as f64,
+                    sync.bytes_sent as f64,
+                ],
+                self.stir_work_sums(p, owned.clone()),
+                self.domain.comm(),
+            );
         clock.lap(Stage::Conserved);
 
         // One global minimum: time-step criteria, neighbour and domain
@@ -372,6 +388,11 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         clock.lap(Stage::Integrate);
 
         let t = self.t;
+        let external_work = self.external_work;
+        // The stirring's work over the step, with the time-centred velocity
+        // v_n + a dt / 2 (the kick it gets): sum m a_s . v_n dt + sum m a_s . a dt^2 / 2.
+        let [s1, s2] = work_terms;
+        self.external_work += s1 * dt + 0.5 * s2 * dt * dt;
         self.t += dt;
         self.dt_prev = dt;
         self.step = step;
@@ -381,6 +402,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             dt,
             dt_limit,
             conserved,
+            external_work,
             neighbors: NeighborStats {
                 min_count: ext.nc_min as usize,
                 max_count: ext.nc_max as usize,

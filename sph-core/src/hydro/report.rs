@@ -26,6 +26,8 @@ pub enum Stage {
     Switches,
     /// Momentum and energy equations (with the artificial conductivity).
     Momentum,
+    /// Turbulence driving: the OU update and the stirring acceleration.
+    Stirring,
     /// Self-gravity.
     Gravity,
     /// Halo exchanges of fields between stages (rho, P, c, Omega; IAD;
@@ -40,7 +42,7 @@ pub enum Stage {
 }
 
 /// Names of the timed stages, in pipeline order ([`Stage`]).
-pub const STAGES: [&str; 13] = [
+pub const STAGES: [&str; 14] = [
     "sync",
     "tree",
     "neighbors",
@@ -49,6 +51,7 @@ pub const STAGES: [&str; 13] = [
     "iad",
     "switches",
     "momentum",
+    "stirring",
     "gravity",
     "halos",
     "conserved",
@@ -189,6 +192,9 @@ pub struct RunState {
     /// Largest smoothing length after the last step's update, which the
     /// next sync uses for its halos (none before the first step).
     pub h_next_max: Option<f64>,
+    /// Work done on the gas by the stirring from the run's start to `t`
+    /// (0 without stirring).
+    pub external_work: f64,
 }
 
 /// What one step did.
@@ -204,6 +210,10 @@ pub struct StepReport {
     pub dt_limit: DtLimit,
     /// Conserved quantities at `t`.
     pub conserved: Conserved,
+    /// Work done on the gas by the stirring from the run's start to `t`
+    /// (0 without stirring): `conserved.e_tot() - external_work` is what
+    /// the scheme conserves.
+    pub external_work: f64,
     /// Neighbour statistics of this step over all ranks (`first_over_cap`
     /// is a local index of this rank).
     pub neighbors: NeighborStats,

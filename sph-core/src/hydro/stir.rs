@@ -1,0 +1,159 @@
+//! The stirring stage of a driven run ([`HydroConfig::stirring`](super::HydroConfig::stirring)):
+//! the OU update, the stirring acceleration with its net impulse removed,
+//! and the terms of its work.
+
+use super::Hydro;
+use crate::integrate::velocity_now;
+use crate::stirring::Stirring;
+use crate::{CoreError, Particles};
+use rayon::prelude::*;
+use sph_comm::{Communicator, ExactSum};
+use sph_kernels::Kernel;
+use sph_tree::BoundingBox;
+use std::ops::Range;
+
+/// Particles per partial sum.
+const CHUNK: usize = 4096;
+
+impl<K: Kernel, C: Communicator> Hydro<K, C> {
+    /// Advances the driving by the last step (at the first step, the first
+    /// `dt0`; the state is built then, from the box) and adds the stirring
+    /// acceleration to the owned particles' `a`, less its mass-weighted
+    /// mean, so that it injects no net momentum. Every rank draws the same
+    /// numbers in the same order and the mean is an exact sum: the result
+    /// does not depend on the rank or thread count.
+    pub(super) fn stir(
+        &mut self,
+        p: &mut Particles,
+        bbox: &BoundingBox,
+        owned: Range<usize>,
+    ) -> Result<(), CoreError> {
+        let Some(params) = self.config.stirring else {
+            return Ok(());
+        };
+        let stirring = match &mut self.stirring {
+            Some(s) => s,
+            slot => slot.insert(Stirring::new(params, bbox)?),
+        };
+        stirring.advance(self.dt_prev);
+        let n = owned.len();
+        let [sx, sy, sz] = &mut self.buf.stir;
+        for s in [&mut *sx, &mut *sy, &mut *sz] {
+            s.clear();
+            s.resize(n, 0.0);
+        }
+        let r = owned.clone();
+        stirring.accelerate(&p.x[r.clone()], &p.y[r.clone()], &p.z[r], sx, sy, sz);
+
+        let m = &p.m[owned.clone()];
+        let mut sums = exact_sums(n, |i, s: &mut [ExactSum; 4]| {
+            s[0].add(m[i]);
+            s[1].add(m[i] * sx[i]);
+            s[2].add(m[i] * sy[i]);
+            s[3].add(m[i] * sz[i]);
+        });
+        ExactSum::all_reduce_many(&mut sums, self.domain.comm());
+        let mass = sums[0].value();
+        let mean = [1, 2, 3].map(|k| {
+            if mass > 0.0 {
+                sums[k].value() / mass
+            } else {
+                0.0
+            }
+        });
+        let (ax, ay, az) = (
+            &mut p.ax[owned.clone()],
+            &mut p.ay[owned.clone()],
+            &mut p.az[owned],
+        );
+        for (s, a, mean) in [(sx, ax, mean[0]), (sy, ay, mean[1]), (sz, az, mean[2])] {
+            s.par_iter_mut().zip(a.par_iter_mut()).for_each(|(s, a)| {
+                *s -= mean;
+                *a += *s;
+            });
+        }
+        Ok(())
+    }
+
+    /// This rank's exact partial sums `[sum m a_s . v_n, sum m a_s . a]` of
+    /// the owned particles (`a` the total acceleration, `v_n` the velocity
+    /// at the step's start: [`velocity_now`]); the step's work is
+    /// `S1 dt + S2 dt^2 / 2`. Zero sums without stirring.
+    pub(super) fn stir_work_sums(&self, p: &Particles, owned: Range<usize>) -> [ExactSum; 2] {
+        if self.config.stirring.is_none() {
+            return Default::default();
+        }
+        let [sx, sy, sz] = &self.buf.stir;
+        let dt_prev = self.dt_prev;
+        let o = owned.start;
+        let [s1, s2] = exact_sums(owned.len(), |k, s: &mut [ExactSum; 2]| {
+            let i = o + k;
+            let a_s = [sx[k], sy[k], sz[k]];
+            let a = [p.ax[i], p.ay[i], p.az[i]];
+            let d = [p.dx[i], p.dy[i], p.dz[i]];
+            let (mut sv, mut sa) = (0.0, 0.0);
+            for c in 0..3 {
+                sv += a_s[c] * velocity_now(d[c], a[c], dt_prev);
+                sa += a_s[c] * a[c];
+            }
+            s[0].add(p.m[i] * sv);
+            s[1].add(p.m[i] * sa);
+        });
+        [s1, s2]
+    }
+
+    /// The driving state (phases and generator) for checkpoints, once a
+    /// stirred run has taken a step.
+    pub fn stirring(&self) -> Option<&Stirring> {
+        self.stirring.as_ref()
+    }
+
+    /// Continues a stirred run from a checkpoint's driving state (see
+    /// [`Stirring::restore`]), in the run's box.
+    ///
+    /// # Errors
+    /// A run without stirring, a box the stirring refuses, or a state of
+    /// the wrong size.
+    pub fn restore_stirring(
+        &mut self,
+        bbox: &BoundingBox,
+        phases: &[f64],
+        rng_state: &[f64],
+    ) -> Result<(), CoreError> {
+        let Some(params) = self.config.stirring else {
+            return Err(CoreError::Invalid(
+                "a stirring state was given to a run without stirring".into(),
+            ));
+        };
+        let mut s = Stirring::new(params, bbox)?;
+        s.restore(phases, rng_state)?;
+        self.stirring = Some(s);
+        Ok(())
+    }
+}
+
+/// Exact sums of `terms(i, sums)` over `0..n`, in parallel chunks (the
+/// totals do not depend on the chunking).
+fn exact_sums<const S: usize>(
+    n: usize,
+    terms: impl Fn(usize, &mut [ExactSum; S]) + Sync,
+) -> [ExactSum; S] {
+    (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let mut s: [ExactSum; S] = std::array::from_fn(|_| ExactSum::new());
+            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                terms(i, &mut s);
+            }
+            s
+        })
+        .reduce(
+            || std::array::from_fn(|_| ExactSum::new()),
+            |mut a, b| {
+                for (x, y) in a.iter_mut().zip(b.iter()) {
+                    x.merge(y);
+                }
+                a
+            },
+        )
+}
