@@ -75,8 +75,12 @@ pub struct Summary {
     pub dt_limits: std::collections::BTreeMap<String, u64>,
     /// L1 errors against the reference (if any).
     pub l1: Option<L1>,
-    /// (E_end - E_0) / |E_0|.
+    /// `(E_end - E_0 - W) / (|E_0| + |W|)`, `W` the stirring's work over
+    /// the run (0 without stirring: `(E_end - E_0) / |E_0|`).
     pub energy_rel_drift: f64,
+    /// The stirring's work over the run (stirred runs only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub injected_work: Option<f64>,
     /// |p_end - p_0| / sum m |v| (a scale for round-off).
     pub momentum_rel_drift: f64,
     /// |L_end - L_0| / |L_0| (or over sum m |x||v| when L_0 ~ 0).
@@ -235,6 +239,32 @@ impl<C: Communicator> Simulation<C> {
         })
     }
 
+    /// Continues the driving of a resumed run from its checkpoint's state
+    /// (`state`; `None` for a checkpoint without one).
+    ///
+    /// # Errors
+    /// A stirred run resumed past its first step from a checkpoint without
+    /// a driving state, a driving state given to a run that does not stir,
+    /// or a state of the wrong size.
+    pub fn restore_stirring(
+        &mut self,
+        state: Option<&crate::checkpoint::StirState>,
+    ) -> Result<(), AppError> {
+        let stirs = self.hydro.config().stirring.is_some();
+        match state {
+            Some(s) if stirs => Ok(self
+                .hydro
+                .restore_stirring(&self.scene.bbox, &s.phases, &s.rng)?),
+            Some(_) => Err(AppError::Usage(
+                "the checkpoint holds a stirring state but the run does not stir; restart with its --stir".into(),
+            )),
+            None if stirs && self.resumed_at.is_some_and(|k| k > 0) => Err(AppError::Usage(
+                "the run stirs but the checkpoint holds no stirring state (stir_phases, stir_rng): it is of an unstirred run; give --stir off".into(),
+            )),
+            None => Ok(()),
+        }
+    }
+
     /// Snapshot and checkpoint outputs (none by default).
     ///
     /// # Errors
@@ -348,6 +378,7 @@ impl<C: Communicator> Simulation<C> {
                 bbox: &self.scene.bbox,
                 comm: self.hydro.domain().comm(),
                 total: n,
+                stirring: self.hydro.stirring(),
             };
             observer::notify(&mut observers, &view)?;
         }
@@ -406,10 +437,11 @@ impl<C: Communicator> Simulation<C> {
         if root {
             std::fs::create_dir_all(out).map_err(|e| AppError::io(out, e))?;
             let path = out.join("conserved.csv");
+            let driven = self.hydro.config().stirring.is_some();
             logs = Some((
                 match self.resumed_at {
-                    Some(step) => ConservedCsv::resume(&path, step)?,
-                    None => ConservedCsv::create(&path)?,
+                    Some(step) => ConservedCsv::resume(&path, step, driven)?,
+                    None => ConservedCsv::create(&path, driven)?,
                 },
                 TimingsCsv::create(&out.join("timings.csv"))?,
             ));
@@ -460,7 +492,11 @@ impl<C: Communicator> Simulation<C> {
     ) -> Summary {
         let n = self.total;
         let totals = &tally.totals;
-        let first = tally.first.unwrap_or(end.conserved);
+        let work_end = self.hydro.run_state().external_work;
+        let (first, work_first) = tally.first.unwrap_or((end.conserved, work_end));
+        // What the stirring did over the run (0 unstirred: then the drift
+        // below is (E_end - E_0) / |E_0| to the bit).
+        let work = work_end - work_first;
         let mean_step_s = totals.mean_step_s();
         let per_particle = |x: f64| x / n.max(1) as f64;
         let norm = |v: [f64; 3]| nalgebra::Vector3::from(v).norm();
@@ -500,7 +536,9 @@ impl<C: Communicator> Simulation<C> {
             dt_limits: totals.dt_limits(),
             bins: totals.bins(),
             l1: end.l1,
-            energy_rel_drift: (end.conserved.e_tot() - first.e_tot()) / first.e_tot().abs(),
+            energy_rel_drift: (end.conserved.e_tot() - first.e_tot() - work)
+                / (first.e_tot().abs() + work.abs()),
+            injected_work: self.hydro.config().stirring.map(|_| work),
             momentum_rel_drift: if scale_p > 0.0 { dp / scale_p } else { dp },
             angular_momentum_rel_drift: if l_scale > 0.0 { dl / l_scale } else { dl },
             shock_radius: end.shock_radius,
@@ -684,8 +722,9 @@ impl RunOutputs {
 /// What the summary takes from the steps of a run.
 #[derive(Debug)]
 struct Tally {
-    /// The conserved quantities after the first step.
-    first: Option<Conserved>,
+    /// The conserved quantities at the first step, and the stirring's
+    /// work up to it.
+    first: Option<(Conserved, f64)>,
     /// Energies of every step.
     energies: EnergyTrack,
     /// Stage times and decomposition figures.
@@ -710,7 +749,7 @@ impl Tally {
 
     /// Records step `r`.
     fn record(&mut self, r: &StepReport) {
-        self.first.get_or_insert(r.conserved);
+        self.first.get_or_insert((r.conserved, r.external_work));
         self.energies.push(r.t, &r.conserved);
         self.totals.record(r);
         self.fallbacks += r.energy_fallbacks;

@@ -145,7 +145,12 @@ pub struct Watch {
     pub strict: bool,
     /// Print the first violation of each quantity (rank 0).
     pub warn: bool,
-    first: Option<Conserved>,
+    /// The first step's sums and the stirring's work up to it.
+    first: Option<(Conserved, f64)>,
+    /// The work of the last step seen, and the sum of the steps' |work|
+    /// since the first (the energy that went through the forcing).
+    last_work: f64,
+    work_through: f64,
     momentum_scale: f64,
     violations: Vec<Violation>,
 }
@@ -164,6 +169,8 @@ impl Watch {
             strict,
             warn: true,
             first: None,
+            last_work: 0.0,
+            work_through: 0.0,
             momentum_scale: 0.0,
             violations: Vec::new(),
         }
@@ -303,7 +310,12 @@ impl Watch {
                 particle: blame,
             });
         }
-        let first = *self.first.get_or_insert(c);
+        let (first, w0) = *self.first.get_or_insert_with(|| {
+            self.last_work = r.external_work;
+            (c, r.external_work)
+        });
+        self.work_through += (r.external_work - self.last_work).abs();
+        self.last_work = r.external_work;
         self.momentum_scale = self
             .momentum_scale
             .max((2.0 * c.mass * (c.e_kin + c.e_int.abs())).max(0.0).sqrt());
@@ -317,14 +329,17 @@ impl Watch {
             };
             self.record(v, root)?;
         }
+        // A driven run conserves E - W (W the stirring's work); its scale
+        // grows by the energy that went through the forcing.
         let e0 = first.e_tot();
         let e_scale = if e0 != 0.0 {
             e0.abs()
         } else {
             first.e_kin + first.e_int.abs() + first.e_grav.abs()
-        };
+        } + self.work_through;
+        let change = c.e_tot() - e0 - (r.external_work - w0);
         let drift = if e_scale > 0.0 {
-            (c.e_tot() - e0).abs() / e_scale
+            change.abs() / e_scale
         } else {
             0.0
         };

@@ -101,6 +101,7 @@ impl Case for EvrardCollapse {
             eos: Eos::IdealGas { gamma: GAMMA },
             softening: Some(0.25),
             courant: Some(COURANT),
+            stirring: None,
         }
     }
 

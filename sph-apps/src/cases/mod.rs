@@ -53,6 +53,7 @@ registry! {
     isobaric_cube::IsobaricCube,
     kelvin_helmholtz::KelvinHelmholtz,
     wind_shock::WindShock,
+    turbulence::DrivenTurbulence,
 }
 
 /// Every case, in listing order (the same as [`CASES`]).
@@ -563,8 +564,13 @@ mod tests {
             scheme.viscosity = sph_core::Viscosity::Constant { alpha: 3.0 };
             scheme.conductivity = Some(1.0);
             let wrong = HydroConfig::with_scheme(scheme);
-            // 8 per side, 32 for wind-shock (its 0.25-wide box needs 28).
-            let side = if case.name() == "wind-shock" { 32 } else { 8 };
+            // 8 per side, 32 for wind-shock (its 0.25-wide box needs 28),
+            // 16 for turbulence (whole glass blocks of 16).
+            let side = match case.name() {
+                "wind-shock" => 32,
+                "turbulence" => 16,
+                _ => 8,
+            };
             let layout = Layout::Glass {
                 kernel: sph_kernels::KernelChoice::default(),
                 dir: crate::test_glass_dir(),

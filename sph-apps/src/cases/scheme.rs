@@ -4,6 +4,7 @@
 
 use super::scheme_options::{Setting, SCHEME_OPTIONS, SCHEME_OPTION_COUNT};
 use crate::AppError;
+use sph_core::stirring::StirParams;
 pub use sph_core::timestep::FirstStep;
 pub use sph_core::Scheme;
 use sph_core::{Eos, HydroConfig};
@@ -22,6 +23,9 @@ pub struct Physics {
     /// The case's Courant factor, or `None` to keep the run's
     /// (`TimestepParams::k_courant`, default 0.2).
     pub courant: Option<f64>,
+    /// Turbulence driving ([`sph_core::stirring`]; periodic cubes), or
+    /// none.
+    pub stirring: Option<StirParams>,
 }
 
 impl Physics {
@@ -31,6 +35,7 @@ impl Physics {
         eos: Eos::IdealGas { gamma: 5.0 / 3.0 },
         softening: None,
         courant: None,
+        stirring: None,
     };
 }
 
@@ -62,6 +67,9 @@ pub struct SchemeOverrides {
     pub first_step: Option<FirstStep>,
     /// The equation of state (over the case's, [`Physics::eos`]).
     pub eos: Option<Eos>,
+    /// The driving (over the case's, [`Physics::stirring`]): `Some(None)`
+    /// switches it off.
+    pub stirring: Option<Option<StirParams>>,
 }
 
 impl SchemeOverrides {
@@ -115,6 +123,7 @@ impl SchemeOverrides {
     pub fn apply(&self, scheme: Scheme, physics: Physics, config: &mut HydroConfig) {
         config.scheme = self.over(scheme);
         config.eos = self.eos.unwrap_or(physics.eos);
+        config.stirring = self.stirring.unwrap_or(physics.stirring);
         config.gravity = physics.softening.map(|s| GravityParams {
             softening: self.softening.unwrap_or(s),
             ..config.gravity.unwrap_or_default()

@@ -154,6 +154,23 @@ pub(crate) fn parse_eos(s: &str) -> Result<sph_core::Eos, String> {
     s.parse::<sph_core::Eos>().map_err(|e| e.to_string())
 }
 
+/// `--stir`: `off`, `on` (the defaults) or `KEY=VALUE,...` over the
+/// defaults ([`sph_core::stirring::STIR_KEYS`]).
+pub(crate) fn parse_stir(s: &str) -> Result<StirArg, String> {
+    match s.trim() {
+        "off" => Ok(StirArg(None)),
+        "on" => Ok(StirArg(Some(sph_core::stirring::StirParams::default()))),
+        spec => spec
+            .parse()
+            .map(|p| StirArg(Some(p)))
+            .map_err(|e: sph_core::CoreError| e.to_string()),
+    }
+}
+
+/// The value of `--stir`: the driving, or none (`off`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct StirArg(pub(crate) Option<sph_core::stirring::StirParams>);
+
 /// Particles per side, within [`SIDE_RANGE`].
 pub(crate) fn parse_side(s: &str) -> Result<usize, String> {
     let (lo, hi) = SIDE_RANGE;

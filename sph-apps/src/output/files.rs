@@ -233,7 +233,12 @@ impl<C: Communicator> StepObserver<C> for FileOutputs {
             }
         };
         if checkpoint_due {
-            let snap = checkpoint::snapshot(p, owned, state, view.bbox, attrs);
+            let mut snap = checkpoint::snapshot(p, owned, state, view.bbox, attrs);
+            if let Some(s) = view.stirring {
+                for (name, value) in checkpoint::StirState::attrs(s, state.external_work) {
+                    snap.set_attr(&name, value);
+                }
+            }
             let path = snapfile::numbered(&files.checkpoint_dir, "checkpoint", step);
             let nth = files.summary.checkpoints + 1;
             let pause = files.pause.as_ref();

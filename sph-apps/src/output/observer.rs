@@ -32,6 +32,8 @@ pub struct StepView<'a, C> {
     pub comm: &'a C,
     /// Particles of the whole run (all ranks).
     pub total: usize,
+    /// The driving state after the step (stirred runs).
+    pub stirring: Option<&'a sph_core::stirring::Stirring>,
 }
 
 /// What an observer made of a step.

@@ -88,6 +88,69 @@ impl StirParams {
     }
 }
 
+/// The keys of the text form of [`StirParams`] and what each takes.
+pub const STIR_KEYS: &str = "velocity=V (> 0), energy-prefactor=E (> 0), sol-weight=W (0..1), seed=S (0..2^32), correlation-time=T (> 0, or auto = L / (2 V))";
+
+impl std::fmt::Display for StirParams {
+    /// Every key, in the form [`StirParams::from_str`](std::str::FromStr)
+    /// reads back to the same values (`velocity=0.3,energy-prefactor=0.005,
+    /// sol-weight=0.5,seed=251299,correlation-time=auto`).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "velocity={},energy-prefactor={},sol-weight={},seed={},correlation-time=",
+            self.velocity, self.energy_prefactor, self.sol_weight, self.seed
+        )?;
+        match self.correlation_time {
+            Some(t) => write!(f, "{t}"),
+            None => write!(f, "auto"),
+        }
+    }
+}
+
+impl std::str::FromStr for StirParams {
+    type Err = CoreError;
+
+    /// `KEY=VALUE` pairs separated by commas ([`STIR_KEYS`]), each over
+    /// the defaults; an empty text is the defaults. The result is
+    /// validated.
+    ///
+    /// ```
+    /// use sph_core::stirring::StirParams;
+    /// let s: StirParams = "seed=7,sol-weight=1".parse().unwrap();
+    /// assert_eq!((s.seed, s.sol_weight, s.velocity), (7, 1.0, 0.3));
+    /// assert_eq!(s.to_string().parse::<StirParams>().unwrap(), s);
+    /// assert!("sol-weight=2".parse::<StirParams>().is_err());
+    /// assert!("speed=1".parse::<StirParams>().is_err());
+    /// ```
+    fn from_str(text: &str) -> Result<Self, Self::Err> {
+        let mut s = StirParams::default();
+        for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+            let bad = |why: &str| {
+                CoreError::Invalid(format!("stirring '{pair}': {why}; accepted: {STIR_KEYS}"))
+            };
+            let (key, value) = pair.split_once('=').ok_or_else(|| bad("not KEY=VALUE"))?;
+            let (key, value) = (key.trim(), value.trim());
+            let number = || value.parse::<f64>().map_err(|_| bad("not a number"));
+            match key {
+                "velocity" => s.velocity = number()?,
+                "energy-prefactor" => s.energy_prefactor = number()?,
+                "sol-weight" => s.sol_weight = number()?,
+                "seed" => {
+                    s.seed = value
+                        .parse()
+                        .map_err(|_| bad("not an integer in 0..2^32"))?
+                }
+                "correlation-time" if value == "auto" => s.correlation_time = None,
+                "correlation-time" => s.correlation_time = Some(number()?),
+                _ => return Err(bad("unknown key")),
+            }
+        }
+        s.validate()?;
+        Ok(s)
+    }
+}
+
 /// The driving state: mode set, OU phases, random-number generator, and the
 /// projected amplitudes of the current phases.
 ///

@@ -6,8 +6,8 @@ use super::scheme_args::{SchemeArgs, HEADING};
 use crate::cli::parse::{
     case_names, choice, parse_checkpoint_every, parse_count, parse_courant, parse_duration,
     parse_eos, parse_field_list, parse_keep, parse_kernel, parse_non_negative, parse_positive,
-    parse_side, parse_steps, parse_threads, parse_times, snapshot_fields_help, CheckpointSpec,
-    FieldList, Times,
+    parse_side, parse_steps, parse_stir, parse_threads, parse_times, snapshot_fields_help,
+    CheckpointSpec, FieldList, StirArg, Times,
 };
 use clap::{Args, Parser, ValueEnum};
 use sph_core::timestep::FirstStep;
@@ -125,6 +125,15 @@ pub(crate) struct RunArgs {
     /// volumes and conductivity are refused with them).
     #[arg(long, value_name = "SPEC", value_parser = parse_eos)]
     pub(crate) eos: Option<Eos>,
+    /// Turbulence driving (Federrath et al. 2010, as SPH-EXA) over the
+    /// case's (default: `turbulence` stirs, other cases do not): `off`,
+    /// `on` (SPH-EXA's defaults), or `KEY=VALUE,...` over the defaults:
+    /// `velocity=0.3` (target rms Mach at c = 1), `energy-prefactor=0.005`
+    /// (injected energy prefactor * velocity^3 / L), `sol-weight=0.5`
+    /// (1 solenoidal, 0 compressive), `seed=251299`,
+    /// `correlation-time=auto` (L / (2 velocity)). Needs a periodic cube.
+    #[arg(long, value_name = "SPEC", value_parser = parse_stir)]
+    pub(crate) stir: Option<StirArg>,
     /// Self-gravity: opening angle theta of the tree, a positive number
     /// (cases with gravity only).
     #[arg(long, default_value_t = 0.5, allow_negative_numbers = true,

@@ -237,7 +237,8 @@ fn execute(a: RunArgs) -> Result<(), AppError> {
         Progress::Auto
     };
     let sim = match &loaded {
-        Some(l) => Simulation::resume(scene, kernel, kernel_choice.to_string(), comm, l.state),
+        Some(l) => Simulation::resume(scene, kernel, kernel_choice.to_string(), comm, l.state)
+            .and_then(|mut sim| sim.restore_stirring(l.stirring.as_ref()).map(|()| sim)),
         None => Simulation::with_comm(scene, kernel, kernel_choice.to_string(), comm),
     };
     let result = sim.and_then(|mut sim| {

@@ -54,6 +54,12 @@ pub(crate) fn resolved_config(
     );
     set("courant", Value::Float(config.timestep.k_courant));
     set("eos", Value::String(config.eos.to_string()));
+    // Runs that stir, or were told not to: others keep their config.toml.
+    match config.stirring {
+        Some(s) => set("stir", Value::String(s.to_string())),
+        None if a.stir.is_some() => set("stir", Value::String("off".into())),
+        None => {}
+    }
     set(
         "first-step",
         Value::String(config.timestep.first_step.name().into()),

@@ -72,6 +72,7 @@ pub(crate) fn scheme_overrides(a: &RunArgs) -> Result<SchemeOverrides, AppError>
         courant: a.courant,
         first_step: a.first_step,
         eos: a.eos,
+        stirring: a.stir.map(|s| s.0),
     };
     if a.no_grad_h {
         return overrides.with("grad-h", Setting::Switch(false));
