@@ -47,11 +47,19 @@ fn lines_after(path: &Path, step: usize) -> Vec<String> {
 
 #[test]
 fn written_on_two_ranks_restarted_on_one_and_four() {
-    let root = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("mpi-restart");
+    // Sedov, and turbulence: its driving state (OU phases, generator,
+    // work) continues from the checkpoint too.
+    for case in ["sedov", "turbulence"] {
+        restarted_on_one_and_four(case);
+    }
+}
+
+fn restarted_on_one_and_four(case: &str) {
+    let root = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("mpi-restart-{case}"));
     std::fs::remove_dir_all(&root).ok();
     let dir = |n: &str| root.join(n).to_str().expect("UTF-8").to_owned();
     let common = [
-        "sedov",
+        case,
         "-n",
         "16",
         "-q",
@@ -84,7 +92,7 @@ fn written_on_two_ranks_restarted_on_one_and_four() {
     let two = read(&root.join("two/snapshots/snapshot_00000020.h5"));
     assert!(
         two.bits_eq(&want),
-        "the 2-rank snapshot differs from the serial one"
+        "{case}: the 2-rank snapshot differs from the serial one"
     );
     assert_eq!(lines_after(&root.join("two"), 0), lines_after(&serial, 0));
     for ranks in [1, 4] {
@@ -92,12 +100,12 @@ fn written_on_two_ranks_restarted_on_one_and_four() {
         assert_eq!(
             lines_after(&d, 0),
             want_lines,
-            "{ranks} ranks: conserved.csv"
+            "{case}, {ranks} ranks: conserved.csv"
         );
         let got = read(&d.join("snapshots/snapshot_00000020.h5"));
         assert!(
             got.bits_eq(&want),
-            "{ranks} ranks: the step-20 snapshot differs"
+            "{case}, {ranks} ranks: the step-20 snapshot differs"
         );
     }
 }

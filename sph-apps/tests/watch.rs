@@ -226,3 +226,48 @@ fn alpha_below_the_switch_floor_names_the_options() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+/// A driven run gains energy through the stirring: the watch counts the
+/// work (`W_ext`), so `--strict` runs turbulence through; the plain
+/// drift, `(E - E_0) / |E_0|`, is far past the bound in the same run.
+#[test]
+fn a_driven_run_is_checked_against_its_work() {
+    let dir = scratch("driven");
+    let out = dir.join("turbulence");
+    let o = sphexa(&[
+        "run",
+        "turbulence",
+        "-n",
+        "12",
+        "--end-time",
+        "1.5",
+        "--strict",
+        "-q",
+        "--out",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let csv = std::fs::read_to_string(out.join("conserved.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (e_col, w_col) = (col("E_tot"), col("W_ext"));
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let (first, last) = (&rows[0], rows.last().unwrap());
+    let (e0, e, w) = (first[e_col], last[e_col], last[w_col]);
+    assert!(w > 0.0, "no work done: {w}");
+    assert!(
+        (e - e0).abs() / e0.abs() > 1.0,
+        "E {e0} -> {e}: the driving did little"
+    );
+    let closure = (e - e0 - w).abs() / (e0.abs() + w);
+    assert!(
+        closure < 1e-2,
+        "E - E0 - W = {closure} of the energy through the run"
+    );
+    let v = summary(&out);
+    assert!(v["injected_work"].as_f64().unwrap() > 0.0, "{v}");
+    assert!(v["energy_rel_drift"].as_f64().unwrap().abs() < 1e-2, "{v}");
+}
