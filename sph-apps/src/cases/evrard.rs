@@ -2,8 +2,8 @@
 //! falls in under its own gravity, bounces and settles; compared with the
 //! energies of a 1-D Lagrangian reference.
 
-use super::{Request, Layout, Listing, cube_lattice, field_set, initial_h, Case, EnergyPoint, InitialState, Physics, Scheme};
-use crate::glass::{self, GlassSpec};
+use super::{Request, Listing, cube_lattice, field_set, initial_h, Case, EnergyPoint, InitialState, Physics, Scheme};
+use crate::glass;
 use crate::AppError;
 use sph_core::Eos;
 use sph_tree::{Boundary, BoundingBox};
@@ -107,7 +107,7 @@ impl Case for EvrardCollapse {
 
     /// The unit sphere cut from the cube `[-1, 1]^3` filled at spacing
     /// `2 / side` with a glass ([`GLASS_SIDE`]^3 block, tiled; a cubic
-    /// lattice with [`Layout::Lattice`]), stretched radially
+    /// lattice with [`Layout::Lattice`](super::Layout::Lattice)), stretched radially
     /// (`r -> (r / R)^(3/2)`, with `R` the radius of the ball the points'
     /// cells fill) so that the enclosed mass goes as `r^2`, i.e.
     /// `rho = 1 / (2 pi r)`; equal masses `1/N`, at rest, `u = 0.05`; h from
@@ -119,21 +119,13 @@ impl Case for EvrardCollapse {
         let Request { side, config, share, layout } = *request;
         let cell = 2.0 / side as f64;
         let inside = |q: &[f64; 3]| q[0] * q[0] + q[1] * q[1] + q[2] * q[2] < 1.0;
-        let pts: Vec<[f64; 3]> = match layout {
-            Layout::Glass { kernel, dir } => {
-                let spec = GlassSpec {
-                    side: side.clamp(glass::MIN_SIDE, GLASS_SIDE),
-                    kernel: *kernel,
-                    ng0: config.neighbors.ng0,
-                    ngmax: config.neighbors.ngmax,
-                };
-                let g = glass::cached(&spec, dir)?;
-                g.fill([-1.0; 3], [1.0; 3], cell)
-                    .into_iter()
-                    .filter(inside)
-                    .collect()
-            }
-            Layout::Lattice => cube_lattice(side, -1.0, 2.0).filter(inside).collect(),
+        let pts: Vec<[f64; 3]> = match layout.glass(side.clamp(glass::MIN_SIDE, GLASS_SIDE), config)? {
+            Some(g) => g
+                .fill([-1.0; 3], [1.0; 3], cell)
+                .into_iter()
+                .filter(inside)
+                .collect(),
+            None => cube_lattice(side, -1.0, 2.0).filter(inside).collect(),
         };
         let n = pts.len();
         let (mut p, mine) = share.particles(n, field_set(config));

@@ -246,6 +246,34 @@ pub enum Layout {
     Lattice,
 }
 
+impl Layout {
+    /// The glass block of `side`^3 particles relaxed with the run's
+    /// kernel and the neighbour counts of `config` (from the cache, or
+    /// relaxed and stored there), or `None` for cubic lattices.
+    ///
+    /// # Errors
+    /// A side outside the glass's range, a failed relaxation, or a cache
+    /// folder that cannot be written.
+    pub fn glass(
+        &self,
+        side: usize,
+        config: &HydroConfig,
+    ) -> Result<Option<crate::glass::Glass>, AppError> {
+        match self {
+            Layout::Lattice => Ok(None),
+            Layout::Glass { kernel, dir } => {
+                let spec = crate::glass::GlassSpec {
+                    side,
+                    kernel: *kernel,
+                    ng0: config.neighbors.ng0,
+                    ngmax: config.neighbors.ngmax,
+                };
+                crate::glass::cached(&spec, dir).map(Some)
+            }
+        }
+    }
+}
+
 impl Default for Layout {
     /// Glass with the default kernel, cached in
     /// [`crate::glass::default_cache_dir`].

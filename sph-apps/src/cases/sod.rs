@@ -9,7 +9,7 @@
 //! Both gases are made of equal-mass particles, the thin one at twice the
 //! spacing (8x less dense), from one periodic glass block
 //! ([`crate::glass`], `cross/2` particles per side, relaxed with the run's
-//! kernel and neighbour counts) or, with [`Layout::Lattice`], from cubic
+//! kernel and neighbour counts) or, with [`Layout::Lattice`](super::Layout::Lattice), from cubic
 //! lattices; the cross-section is at least 16 spacings of the dense gas,
 //! and wide enough that `2h` of the thin gas is at most 0.4 of it.
 //!
@@ -28,10 +28,9 @@
 //! 0.0130 / 0.0154 / 0.0321 and 0.0078 / 0.0100 / 0.0195, but put the shock
 //! 2.1% ahead at side 40.
 
-use super::{Request, Layout, 
+use super::{Request, 
     field_set, initial_h, Case, InitialState, Listing, Reference, Scheme, Tube,
 };
-use crate::glass::{self, GlassSpec};
 use crate::reference::{GasState, Riemann};
 use crate::AppError;
 use sph_tree::{Boundary, BoundingBox};
@@ -105,24 +104,17 @@ impl Case for SodTube {
         let h_dense = initial_h(config.neighbors.ng0, dx * dx * dx, 1);
         let u = |g: GasState| g.p / ((GAMMA - 1.0) * g.rho);
         let (thin_x, thin_yz) = (side / 2, cross / 2);
-        let (n, n_dense, placed) = match layout {
-            Layout::Lattice => {
+        // One glass block, thin_yz per side: at the thin spacing it spans
+        // the tube's width once, at the dense spacing half of it, so y and z
+        // stay seamless; along x the tiles are cut at the interfaces. Every
+        // rank places all particles and keeps its share (a Sod tube is
+        // small).
+        let (n, n_dense, placed) = match layout.glass(thin_yz, config)? {
+            None => {
                 let n_dense = side * cross * cross;
                 (n_dense + thin_x * thin_yz * thin_yz, n_dense, None)
             }
-            Layout::Glass { kernel, dir } => {
-                // One glass block, thin_yz per side: at the thin spacing it
-                // spans the tube's width once, at the dense spacing half of
-                // it, so y and z stay seamless; along x the tiles are cut
-                // at the interfaces. Every rank places all particles and
-                // keeps its share (a Sod tube is small).
-                let spec = GlassSpec {
-                    side: thin_yz,
-                    kernel: *kernel,
-                    ng0: config.neighbors.ng0,
-                    ngmax: config.neighbors.ngmax,
-                };
-                let g = glass::cached(&spec, dir)?;
+            Some(g) => {
                 let mut all = g.fill([-INTERFACE, 0.0, 0.0], [INTERFACE, width, width], dx);
                 let n_dense = all.len();
                 let thin = g.fill([INTERFACE, 0.0, 0.0], [INTERFACE + 1.0, width, width], 2.0 * dx);

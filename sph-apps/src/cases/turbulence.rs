@@ -14,8 +14,7 @@
 //! cubic lattice. There is no analytic solution: the curve tracks the
 //! mass-weighted rms Mach number and the width of `ln rho` against time.
 
-use super::{field_set, initial_h, Case, Curve, InitialState, Layout, Listing, Physics, Request};
-use crate::glass::{self, GlassSpec};
+use super::{field_set, initial_h, Case, Curve, InitialState, Listing, Physics, Request};
 use crate::AppError;
 use sph_core::stirring::StirParams;
 use sph_core::{Eos, Particles, Scheme};
@@ -68,22 +67,12 @@ impl Case for DrivenTurbulence {
         let Request { side, config, share, layout } = *request;
         let n = side * side * side;
         let dx = 1.0 / side as f64;
-        let placed = match layout {
-            Layout::Lattice => None,
-            Layout::Glass { kernel, dir } => {
-                // Whole blocks of 16 where they fit (SPH-EXA's template),
-                // else one block of the run's size.
-                let block = if side.is_multiple_of(BLOCK) { BLOCK } else { side };
-                let spec = GlassSpec {
-                    side: block,
-                    kernel: *kernel,
-                    ng0: config.neighbors.ng0,
-                    ngmax: config.neighbors.ngmax,
-                };
-                let block = glass::cached(&spec, dir)?;
-                Some(block.fill([-0.5; 3], [0.5; 3], dx))
-            }
-        };
+        // Whole blocks of 16 where they fit (SPH-EXA's template), else one
+        // block of the run's size.
+        let block = if side.is_multiple_of(BLOCK) { BLOCK } else { side };
+        let placed = layout
+            .glass(block, config)?
+            .map(|g| g.fill([-0.5; 3], [0.5; 3], dx));
         let h0 = initial_h(config.neighbors.ng0, 1.0, n);
         let (mut p, mine) = share.particles(n, field_set(config));
         for (k, g) in mine.enumerate() {

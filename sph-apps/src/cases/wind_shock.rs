@@ -13,10 +13,9 @@
 //! `side/4` particles per side, relaxed with the run's kernel and
 //! neighbour counts: at the wind's spacing it spans the box's width once,
 //! so the wind has no seam across the periodic faces) or, with
-//! [`Layout::Lattice`], from cubic lattices.
+//! [`Layout::Lattice`](super::Layout::Lattice), from cubic lattices.
 
-use super::{Request, Layout, field_set, initial_h, Case, Curve, InitialState, Listing, Scheme};
-use crate::glass::{self, GlassSpec};
+use super::{Request, field_set, initial_h, Case, Curve, InitialState, Listing, Scheme};
 use crate::AppError;
 use sph_core::Particles;
 use sph_tree::{Boundary, BoundingBox};
@@ -109,19 +108,12 @@ impl Case for WindShock {
         };
         let k = (2.0 * RADIUS / dc).ceil() as usize + 1;
         let lo = CENTRE.map(|c| c - 0.5 * k as f64 * dc);
-        let (wind, cloud): (Vec<[f64; 3]>, Vec<[f64; 3]>) = match layout {
-            Layout::Lattice => (
+        let (wind, cloud): (Vec<[f64; 3]>, Vec<[f64; 3]>) = match layout.glass(side / 4, config)? {
+            None => (
                 lattice(d, [0.0; 3], [side, side / 4, side / 4]).collect(),
                 lattice(dc, lo, [k; 3]).collect(),
             ),
-            Layout::Glass { kernel, dir } => {
-                let spec = GlassSpec {
-                    side: side / 4,
-                    kernel: *kernel,
-                    ng0: config.neighbors.ng0,
-                    ngmax: config.neighbors.ngmax,
-                };
-                let g = glass::cached(&spec, dir)?;
+            Some(g) => {
                 let hi = lo.map(|c| c + k as f64 * dc);
                 (g.fill([0.0; 3], BOX, d), g.fill(lo, hi, dc))
             }
