@@ -36,6 +36,7 @@ pub mod plot;
 pub mod reference;
 pub mod rng;
 pub mod simulation;
+pub mod spectrum;
 pub mod stress;
 pub mod watch;
 
@@ -73,6 +74,9 @@ pub enum AppError {
     /// A bad reference-solution parameter.
     #[error(transparent)]
     Reference(#[from] reference::ReferenceError),
+    /// A velocity spectrum or density PDF could not be computed.
+    #[error(transparent)]
+    Spectrum(#[from] spectrum::SpectrumError),
     /// A snapshot or checkpoint file could not be written or read.
     #[error(transparent)]
     Snapshot(#[from] sph_io::IoError),
