@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{assert_mentions, refused, scratch, sphexa, sphexa_command};
+use common::{assert_mentions, refused, s, scratch, sphexa, sphexa_command};
 use std::path::PathBuf;
 
 #[test]
@@ -360,4 +360,64 @@ fn first_step_criteria_skips_the_growth_from_dt0() {
     assert!(free[0] > 100.0 * ramp[0], "{free:?}");
     // After it the growth limit holds again.
     assert!(free[1] <= 1.1 * free[0] * (1.0 + 1e-15), "{free:?}");
+}
+
+/// `sphexa spectrum` on a driven run's snapshot: the width of ln rho it
+/// reports is the one the run's curve recorded at that step (both exact
+/// mass sums), and its files are written; a missing file is named.
+#[test]
+fn spectrum_of_a_snapshot() {
+    let dir = scratch("spectrum");
+    let out = dir.join("run");
+    let o = sphexa(&[
+        "run",
+        "turbulence",
+        "-n",
+        "12",
+        "--steps",
+        "40",
+        "--snapshot-every-steps",
+        "40",
+        "--snapshot-fields",
+        "x,y,z,vx,vy,vz,m,rho",
+        "-q",
+        "--out",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let snap = out.join("snapshots/snapshot_00000040.h5");
+    let spec = dir.join("spectrum");
+    let o = sphexa(&["spectrum", s(&snap), "--grid", "16", "--out", s(&spec)]);
+    let text = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let width: f64 = text
+        .split("width ")
+        .nth(1)
+        .and_then(|w| w.split_whitespace().next())
+        .and_then(|w| w.parse().ok())
+        .unwrap_or_else(|| panic!("no width in: {text}"));
+    let curve = std::fs::read_to_string(out.join("curve.csv")).unwrap();
+    let last: Vec<f64> = curve
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    // step, t, mach_rms, sigma_ln_rho, mean_ln_rho; the line prints 5 digits.
+    assert_eq!(last[0], 40.0);
+    assert!(
+        (width / last[3] - 1.0).abs() < 1e-4,
+        "width {width} against {}",
+        last[3]
+    );
+    let csv = std::fs::read_to_string(spec.join("spectrum.csv")).unwrap();
+    assert!(csv.starts_with("k,E,E_sol,E_comp,cells"), "{csv}");
+    assert!(spec.join("lnrho_pdf.csv").exists());
+
+    // A file that is not there is named.
+    let missing = dir.join("missing.h5");
+    let o = sphexa(&["spectrum", s(&missing)]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("missing.h5"));
 }

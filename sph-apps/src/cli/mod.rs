@@ -1,5 +1,6 @@
 //! The `sphexa` command line: the top-level parser and the dispatch to one
-//! module per subcommand (`run`, `cases`, `bench`, `stress`, `glass`),
+//! module per subcommand (`run`, `cases`, `bench`, `stress`, `glass`,
+//! `spectrum`),
 //! each of which parses its arguments and calls the library.
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
@@ -25,6 +26,7 @@ mod cases;
 mod glass;
 mod parse;
 mod run;
+mod spectrum;
 mod stress;
 
 // No doc comment on `Cli`: clap would take it as the about text, which is
@@ -63,6 +65,12 @@ enum Command {
     /// cache that cases set up from glass read ($SPHEXA_GLASS_DIR, else
     /// $XDG_CACHE_HOME/sphexa/glass, else ~/.cache/sphexa/glass).
     Glass(glass::GlassArgs),
+    /// The velocity power spectrum E(k) (with its solenoidal and
+    /// compressive parts, deconvolved from the TSC deposit) and the PDF of
+    /// ln(rho / mean rho) of one snapshot in a periodic cube, ours or an
+    /// SPH-EXA H5Part dump: spectrum.csv and lnrho_pdf.csv, and a line with
+    /// the total, the slope over k = 3..8 and the width of ln rho.
+    Spectrum(spectrum::SpectrumArgs),
 }
 
 /// The `sphexa` binary: smoothed particle hydrodynamics (the SPH-EXA
@@ -83,6 +91,7 @@ pub fn main() -> ExitCode {
         }
         Command::Stress(args) => stress::stress(args),
         Command::Glass(args) => glass::glass(args).map(|()| true),
+        Command::Spectrum(args) => spectrum::spectrum(args).map(|()| true),
         Command::Bench(args) => bench::bench(*args).map(|()| true),
         Command::Run(args) => run::run(
             *args,

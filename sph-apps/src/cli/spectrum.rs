@@ -1,0 +1,154 @@
+//! `sphexa spectrum`: the velocity power spectrum and the ln-density PDF
+//! of one snapshot, ours or another code's H5Part dump (SPH-EXA's), so
+//! that both codes of a side-by-side are measured by one program
+//! ([`crate::spectrum`]).
+
+use super::parse::parse_count;
+use crate::checkpoint::split_spec;
+use crate::spectrum::{
+    slope, velocity_spectrum, write_pdf_csv, write_spectrum_csv, DepositScale, Extremes, LnRhoPdf,
+    SpectrumGrid,
+};
+use crate::AppError;
+use clap::Args;
+use std::path::{Path, PathBuf};
+
+/// The options of `sphexa spectrum`.
+#[derive(Args, Debug)]
+pub(crate) struct SpectrumArgs {
+    /// Snapshot `FILE[:K]` (step group K, default the last): ours or an
+    /// H5Part dump of SPH-EXA with x, y, z, vx, vy, vz, m and rho, in a
+    /// periodic cube (its `box` attribute, or --box).
+    file: String,
+    /// Grid cells per side, 8 to 512 (default: the particles' cube root,
+    /// rounded to an even number): shells k up to half of it.
+    #[arg(long, value_name = "N", value_parser = parse_count)]
+    grid: Option<usize>,
+    /// The cube `LO:HI` on every axis, for files without a `box` attribute.
+    #[arg(long = "box", value_name = "LO:HI", value_parser = parse_interval)]
+    cube: Option<(f64, f64)>,
+    /// Leave the spectrum convolved with the deposit's window (TSC), not
+    /// divided by it.
+    #[arg(long)]
+    raw: bool,
+    /// Folder for spectrum.csv (k, E, E_sol, E_comp, cells) and
+    /// lnrho_pdf.csv (s = ln(rho / mean rho), pdf, mass); default: the
+    /// snapshot's folder, the files named after it.
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+}
+
+/// `LO:HI` with LO < HI, both finite.
+fn parse_interval(s: &str) -> Result<(f64, f64), String> {
+    let bad = || format!("'{s}': expected LO:HI with finite numbers LO < HI, e.g. -0.5:0.5");
+    let (a, b) = s.split_once(':').ok_or_else(bad)?;
+    let (lo, hi): (f64, f64) = (
+        a.trim().parse().map_err(|_| bad())?,
+        b.trim().parse().map_err(|_| bad())?,
+    );
+    if lo.is_finite() && hi.is_finite() && lo < hi {
+        Ok((lo, hi))
+    } else {
+        Err(bad())
+    }
+}
+
+/// The fields a spectrum reads.
+const FIELDS: [&str; 8] = ["x", "y", "z", "vx", "vy", "vz", "m", "rho"];
+
+/// `sphexa spectrum`: read, deposit, transform, write, report.
+pub(crate) fn spectrum(a: SpectrumArgs) -> Result<(), AppError> {
+    let (path, k) = split_spec(&a.file)?;
+    let count = sph_io::foreign::step_count(&path)
+        .map_err(|e| AppError::Usage(format!("{}: {e}", path.display())))?;
+    let index = k.map_or(count.saturating_sub(1), |k| k as usize);
+    let step = sph_io::foreign::read_foreign_rows(&path, index, &FIELDS, &[], 0..u64::MAX)?;
+    let field = |n: &str| step.field(n).expect("a required field was read");
+    let (lo, length) = match (a.cube, step.bbox) {
+        (Some((lo, hi)), _) => (lo, hi - lo),
+        (None, Some(b)) => {
+            let length = b[1] - b[0];
+            let cubic = (0..3).all(|d| {
+                (b[2 * d] - b[0]).abs() <= 1e-12 * length
+                    && (b[2 * d + 1] - b[2 * d] - length).abs() <= 1e-12 * length
+            });
+            if !cubic {
+                return Err(AppError::Usage(format!(
+                    "{}: its box {b:?} is not a cube; a spectrum needs a periodic cube (give --box LO:HI to use one)",
+                    path.display()
+                )));
+            }
+            (b[0], length)
+        }
+        (None, None) => {
+            return Err(AppError::Usage(format!(
+                "{}: Step#{index} has no box attribute; give the periodic cube with --box LO:HI",
+                path.display()
+            )))
+        }
+    };
+    let n = step.total as usize;
+    let grid_n = a.grid.unwrap_or_else(|| {
+        let side = (n as f64).cbrt().round() as usize;
+        side.next_multiple_of(2).max(8)
+    });
+    let (m, vx, vy, vz) = (field("m"), field("vx"), field("vy"), field("vz"));
+    let spectral =
+        |e: crate::spectrum::SpectrumError| AppError::Usage(format!("{}: {e}", path.display()));
+    let scale = DepositScale::new(Extremes::local(m, vx, vy, vz).map_err(spectral)?, n as u64)
+        .map_err(spectral)?;
+    let mut grid = SpectrumGrid::new(grid_n, [lo; 3], length, scale).map_err(spectral)?;
+    grid.deposit(field("x"), field("y"), field("z"), m, vx, vy, vz)
+        .map_err(spectral)?;
+    let s = velocity_spectrum(&grid, !a.raw).map_err(spectral)?;
+    let mut pdf = LnRhoPdf::new();
+    let rho_bar = grid.total_mass() / length.powi(3);
+    pdf.add(m, field("rho"), rho_bar).map_err(spectral)?;
+
+    let (dir, stem) = output_names(&path, index, a.out.as_deref());
+    std::fs::create_dir_all(&dir).map_err(|e| AppError::io(&dir, e))?;
+    let write = |name: String, body: &dyn Fn(&mut Vec<u8>) -> std::io::Result<()>| {
+        let file = dir.join(name);
+        let mut bytes = Vec::new();
+        body(&mut bytes).expect("writing to memory");
+        std::fs::write(&file, bytes).map_err(|e| AppError::io(&file, e))?;
+        Ok::<_, AppError>(file)
+    };
+    let spectrum_file = write(format!("{stem}spectrum.csv"), &|w| {
+        write_spectrum_csv(w, &s)
+    })?;
+    let pdf_file = write(format!("{stem}lnrho_pdf.csv"), &|w| write_pdf_csv(w, &pdf))?;
+    let k_hi = 8.min(grid_n / 2);
+    let fit =
+        slope(&s, 3.min(k_hi - 1), k_hi).map_or_else(|e| format!("({e})"), |v| format!("{v:.3}"));
+    say!(
+        "{}, Step#{index}{}: {n} particles on {grid_n}^3 cells; E total {:.6e} (<|u|^2>/2 {:.6e}), slope of ln E over k = 3..{k_hi} {fit}; ln rho: mean {:.4e}, width {:.4e}",
+        path.display(),
+        step.time.map_or(String::new(), |t| format!(" (t = {t})")),
+        s.total(),
+        s.grid_energy,
+        pdf.mean(),
+        pdf.width()
+    );
+    say!(
+        "wrote {} and {}",
+        spectrum_file.display(),
+        pdf_file.display()
+    );
+    Ok(())
+}
+
+/// The output folder and file-name prefix: `--out DIR` and no prefix, or
+/// the snapshot's folder and `NAME_K_` (its stem and step).
+fn output_names(path: &Path, index: usize, out: Option<&Path>) -> (PathBuf, String) {
+    match out {
+        Some(d) => (d.to_path_buf(), String::new()),
+        None => {
+            let dir = path.parent().map_or_else(PathBuf::new, Path::to_path_buf);
+            let stem = path
+                .file_stem()
+                .map_or("snapshot".into(), |s| s.to_string_lossy());
+            (dir, format!("{stem}_{index}_"))
+        }
+    }
+}
