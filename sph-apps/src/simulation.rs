@@ -15,6 +15,7 @@ use crate::output::files::FileOutputs;
 use crate::output::observer::{self, StepObserver, StepView};
 use crate::output::progress::ProgressReporter;
 use crate::output::snapshot as snapfile;
+use crate::output::spectra::SpectraObserver;
 use crate::output::timings::{RankTimings, StageTotals, TimingsCsv};
 use crate::output::{particles, profile, summary};
 use crate::watch::{self, Watch, WatchSummary};
@@ -467,6 +468,10 @@ impl<C: Communicator> Simulation<C> {
             }
             None => None,
         };
+        let spectra = self
+            .outputs
+            .spectra_every_time
+            .map(|dt| SpectraObserver::new(dt, t0, root.then(|| out.join("spectra"))));
         let files = FileOutputs::new(&self.outputs, self.scene.case, out, t0)?;
         if files.any() && root {
             files.create_dirs()?;
@@ -477,6 +482,7 @@ impl<C: Communicator> Simulation<C> {
             bar,
             start,
             curve,
+            spectra,
             files,
         })
     }
@@ -689,6 +695,7 @@ struct RunOutputs {
     /// When the loop's clock started (`wall_s` of the summary).
     start: Instant,
     curve: Option<CurveObserver>,
+    spectra: Option<SpectraObserver>,
     files: FileOutputs,
 }
 
@@ -709,6 +716,9 @@ impl RunOutputs {
         }
         if let Some(c) = self.curve.as_mut() {
             list.push(Box::new(c));
+        }
+        if let Some(s) = self.spectra.as_mut() {
+            list.push(Box::new(s));
         }
         if let Some(w) = watch {
             list.push(Box::new(w));

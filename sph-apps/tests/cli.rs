@@ -362,9 +362,10 @@ fn first_step_criteria_skips_the_growth_from_dt0() {
     assert!(free[1] <= 1.1 * free[0] * (1.0 + 1e-15), "{free:?}");
 }
 
-/// `sphexa spectrum` on a driven run's snapshot: the width of ln rho it
-/// reports is the one the run's curve recorded at that step (both exact
-/// mass sums), and its files are written; a missing file is named.
+/// `sphexa spectrum` on a driven run's snapshot gives the spectrum the run
+/// itself wrote at that step (`--spectra-every-time`) to the byte, and the
+/// width of ln rho the run's curve recorded (both exact sums); a missing
+/// file is named.
 #[test]
 fn spectrum_of_a_snapshot() {
     let dir = scratch("spectrum");
@@ -374,10 +375,12 @@ fn spectrum_of_a_snapshot() {
         "turbulence",
         "-n",
         "12",
-        "--steps",
-        "40",
-        "--snapshot-every-steps",
-        "40",
+        "--end-time",
+        "0.1",
+        "--snapshot-every-time",
+        "0.05",
+        "--spectra-every-time",
+        "0.05",
         "--snapshot-fields",
         "x,y,z,vx,vy,vz,m,rho",
         "-q",
@@ -385,35 +388,50 @@ fn spectrum_of_a_snapshot() {
         s(&out),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let snap = out.join("snapshots/snapshot_00000040.h5");
-    let spec = dir.join("spectrum");
-    let o = sphexa(&["spectrum", s(&snap), "--grid", "16", "--out", s(&spec)]);
-    let text = String::from_utf8_lossy(&o.stdout).to_string();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let width: f64 = text
-        .split("width ")
-        .nth(1)
-        .and_then(|w| w.split_whitespace().next())
-        .and_then(|w| w.parse().ok())
-        .unwrap_or_else(|| panic!("no width in: {text}"));
     let curve = std::fs::read_to_string(out.join("curve.csv")).unwrap();
-    let last: Vec<f64> = curve
-        .lines()
-        .last()
+    let mut snaps: Vec<PathBuf> = std::fs::read_dir(out.join("snapshots"))
         .unwrap()
-        .split(',')
-        .map(|v| v.parse().unwrap())
+        .map(|e| e.unwrap().path())
         .collect();
-    // step, t, mach_rms, sigma_ln_rho, mean_ln_rho; the line prints 5 digits.
-    assert_eq!(last[0], 40.0);
-    assert!(
-        (width / last[3] - 1.0).abs() < 1e-4,
-        "width {width} against {}",
-        last[3]
-    );
-    let csv = std::fs::read_to_string(spec.join("spectrum.csv")).unwrap();
-    assert!(csv.starts_with("k,E,E_sol,E_comp,cells"), "{csv}");
-    assert!(spec.join("lnrho_pdf.csv").exists());
+    snaps.sort();
+    assert_eq!(snaps.len(), 2, "{snaps:?}");
+    for snap in snaps {
+        let name = snap.file_stem().unwrap().to_string_lossy().to_string();
+        let step: u64 = name.trim_start_matches("snapshot_").parse().unwrap();
+        let spec = dir.join(format!("spectrum-{step}"));
+        let o = sphexa(&["spectrum", s(&snap), "--out", s(&spec)]);
+        let text = String::from_utf8_lossy(&o.stdout).to_string();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let mine = std::fs::read(spec.join("spectrum.csv")).unwrap();
+        let run = std::fs::read(out.join(format!("spectra/spectrum_{step:08}.csv"))).unwrap();
+        assert!(
+            mine == run,
+            "step {step}: the run's spectrum differs from the snapshot's"
+        );
+        assert!(String::from_utf8_lossy(&mine).starts_with("k,E,E_sol,E_comp,cells"));
+        let width: f64 = text
+            .split("width ")
+            .nth(1)
+            .and_then(|w| w.split_whitespace().next())
+            .and_then(|w| w.parse().ok())
+            .unwrap_or_else(|| panic!("no width in: {text}"));
+        // step, t, mach_rms, sigma_ln_rho, mean_ln_rho; the line prints 5 digits.
+        let row: Vec<f64> = curve
+            .lines()
+            .skip(1)
+            .map(|l| {
+                l.split(',')
+                    .map(|v| v.parse().unwrap())
+                    .collect::<Vec<f64>>()
+            })
+            .find(|r| r[0] == step as f64)
+            .unwrap();
+        assert!(
+            (width / row[3] - 1.0).abs() < 1e-4,
+            "width {width} against {}",
+            row[3]
+        );
+    }
 
     // A file that is not there is named.
     let missing = dir.join("missing.h5");

@@ -73,6 +73,10 @@ fn restarted_on_one_and_four(case: &str) {
     let with = |out: &str, extra: &[&str]| {
         let mut v: Vec<String> = common.iter().map(|s| s.to_string()).collect();
         v.extend(["--out".into(), out.to_owned()]);
+        if case == "turbulence" {
+            // Spectra too: a fixed-point deposit reduced over the ranks.
+            v.extend(["--spectra-every-time".into(), "0.001".into()]);
+        }
         v.extend(extra.iter().map(|s| s.to_string()));
         v
     };
@@ -95,6 +99,23 @@ fn restarted_on_one_and_four(case: &str) {
         "{case}: the 2-rank snapshot differs from the serial one"
     );
     assert_eq!(lines_after(&root.join("two"), 0), lines_after(&serial, 0));
+    if case == "turbulence" {
+        let spectra = |d: &str| -> Vec<(String, Vec<u8>)> {
+            let mut files: Vec<_> = std::fs::read_dir(root.join(d).join("spectra"))
+                .expect("spectra written")
+                .map(|e| {
+                    let p = e.expect("entry").path();
+                    let name = p.file_name().unwrap().to_string_lossy().to_string();
+                    (name, std::fs::read(&p).expect("readable"))
+                })
+                .collect();
+            files.sort();
+            files
+        };
+        let one = spectra("serial");
+        assert!(one.len() >= 4, "spectra: {:?}", one.iter().map(|f| &f.0).collect::<Vec<_>>());
+        assert!(spectra("two") == one, "the 2-rank spectra differ from the serial ones");
+    }
     for ranks in [1, 4] {
         let d = root.join(format!("restart-{ranks}"));
         assert_eq!(

@@ -6,8 +6,8 @@
 use super::parse::parse_count;
 use crate::checkpoint::split_spec;
 use crate::spectrum::{
-    slope, velocity_spectrum, write_pdf_csv, write_spectrum_csv, DepositScale, Extremes, LnRhoPdf,
-    SpectrumGrid,
+    default_grid, slope, velocity_spectrum, write_csv, write_pdf_csv, write_spectrum_csv,
+    DepositScale, Extremes, LnRhoPdf, SpectrumGrid,
 };
 use crate::AppError;
 use clap::Args;
@@ -88,10 +88,7 @@ pub(crate) fn spectrum(a: SpectrumArgs) -> Result<(), AppError> {
         }
     };
     let n = step.total as usize;
-    let grid_n = a.grid.unwrap_or_else(|| {
-        let side = (n as f64).cbrt().round() as usize;
-        side.next_multiple_of(2).max(8)
-    });
+    let grid_n = a.grid.unwrap_or_else(|| default_grid(n));
     let (m, vx, vy, vz) = (field("m"), field("vx"), field("vy"), field("vz"));
     let spectral =
         |e: crate::spectrum::SpectrumError| AppError::Usage(format!("{}: {e}", path.display()));
@@ -107,17 +104,10 @@ pub(crate) fn spectrum(a: SpectrumArgs) -> Result<(), AppError> {
 
     let (dir, stem) = output_names(&path, index, a.out.as_deref());
     std::fs::create_dir_all(&dir).map_err(|e| AppError::io(&dir, e))?;
-    let write = |name: String, body: &dyn Fn(&mut Vec<u8>) -> std::io::Result<()>| {
-        let file = dir.join(name);
-        let mut bytes = Vec::new();
-        body(&mut bytes).expect("writing to memory");
-        std::fs::write(&file, bytes).map_err(|e| AppError::io(&file, e))?;
-        Ok::<_, AppError>(file)
-    };
-    let spectrum_file = write(format!("{stem}spectrum.csv"), &|w| {
-        write_spectrum_csv(w, &s)
-    })?;
-    let pdf_file = write(format!("{stem}lnrho_pdf.csv"), &|w| write_pdf_csv(w, &pdf))?;
+    let spectrum_file = dir.join(format!("{stem}spectrum.csv"));
+    write_csv(&spectrum_file, |w| write_spectrum_csv(w, &s))?;
+    let pdf_file = dir.join(format!("{stem}lnrho_pdf.csv"));
+    write_csv(&pdf_file, |w| write_pdf_csv(w, &pdf))?;
     let k_hi = 8.min(grid_n / 2);
     let fit =
         slope(&s, 3.min(k_hi - 1), k_hi).map_or_else(|e| format!("({e})"), |v| format!("{v:.3}"));

@@ -60,6 +60,9 @@ pub struct Outputs {
     pub attrs: Vec<(String, Attr)>,
     /// The layout of the snapshots (checkpoints are always ours).
     pub format: SnapshotFormat,
+    /// Velocity spectra and ln-rho PDFs after the first step reaching
+    /// each multiple of this time ([`crate::output::spectra`]).
+    pub spectra_every_time: Option<f64>,
 }
 
 /// The layout snapshots are written in.

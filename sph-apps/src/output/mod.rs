@@ -25,6 +25,7 @@ pub mod particles;
 pub mod profile;
 pub mod progress;
 pub mod snapshot;
+pub mod spectra;
 pub mod summary;
 pub mod timings;
 pub mod totals;

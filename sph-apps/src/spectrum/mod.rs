@@ -54,6 +54,24 @@ pub use grid::{DepositScale, Extremes, SpectrumGrid, FRACTION_BITS, MIN_FRACTION
 pub use pdf::{write_pdf_csv, LnRhoPdf, PDF_BINS, S_MAX, S_MIN};
 pub use power::{slope, velocity_spectrum, write_spectrum_csv, Spectrum};
 
+/// The default grid for `particles` particles: their cube root of cells
+/// per side, rounded to an even number, at least 8.
+pub fn default_grid(particles: usize) -> usize {
+    let side = (particles as f64).cbrt().round() as usize;
+    side.next_multiple_of(2).max(8)
+}
+
+/// Writes the CSV that `body` produces to `path` (made in memory first,
+/// so a failed write names the file).
+pub(crate) fn write_csv(
+    path: &std::path::Path,
+    body: impl FnOnce(&mut Vec<u8>) -> std::io::Result<()>,
+) -> Result<(), crate::AppError> {
+    let mut bytes = Vec::new();
+    body(&mut bytes).map_err(|e| crate::AppError::io(path, e))?;
+    std::fs::write(path, bytes).map_err(|e| crate::AppError::io(path, e))
+}
+
 /// Why a spectrum or PDF could not be computed; each names the bad value.
 #[derive(thiserror::Error, Debug, Clone, PartialEq)]
 #[non_exhaustive]

@@ -210,6 +210,11 @@ pub(crate) struct RunArgs {
     /// (comma-separated, each >= 0).
     #[arg(long, value_name = "T1,T2,...", allow_negative_numbers = true, value_parser = parse_times)]
     pub(crate) snapshot_at: Option<Times>,
+    /// Write the velocity power spectrum and the PDF of ln rho (as
+    /// `sphexa spectrum`) into spectra/ after the first step reaching each
+    /// multiple of T (simulated time, positive; periodic cubes only).
+    #[arg(long, value_name = "T", allow_negative_numbers = true, value_parser = parse_positive)]
+    pub(crate) spectra_every_time: Option<f64>,
     /// Write checkpoints (every field a restart needs, full precision) as
     /// OUT/checkpoints/checkpoint_SSSSSSSS.h5: `N` after every N-th step;
     /// `time:T` after the first step reaching each multiple of simulated

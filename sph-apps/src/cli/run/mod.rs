@@ -91,6 +91,7 @@ fn outputs(a: &RunArgs, config: String, t0: f64) -> Result<Outputs, AppError> {
         checkpoints: every.map(|e| (e, a.checkpoint_keep)),
         attrs: vec![("config".into(), sph_io::Attr::Str(config))],
         format,
+        spectra_every_time: a.spectra_every_time,
     })
 }
 

@@ -98,6 +98,9 @@ pub(crate) fn resolved_config(
     if let Some(n) = a.snapshot_every_steps {
         set("snapshot-every-steps", Value::Integer(n as i64));
     }
+    if let Some(x) = a.spectra_every_time {
+        set("spectra-every-time", Value::Float(x));
+    }
     if let Some(x) = a.snapshot_every_time {
         set("snapshot-every-time", Value::Float(x));
     }

@@ -1,0 +1,150 @@
+//! Spectra during a run (`--spectra-every-time DT`): at each multiple of
+//! DT the velocity power spectrum and the ln-density PDF of all ranks'
+//! particles ([`crate::spectrum`]), written by rank 0 as
+//! `spectra/spectrum_STEP.csv` and `spectra/lnrho_STEP.csv`.
+//!
+//! Collective and rank-independent: the deposit is in fixed point and the
+//! PDF in exact sums, each reduced over the ranks; rank 0 transforms.
+
+use super::observer::{Observed, StepObserver, StepView};
+use super::snapshot::Schedule;
+use crate::spectrum::{
+    default_grid, velocity_spectrum, write_csv, write_pdf_csv, write_spectrum_csv, DepositScale,
+    Extremes, LnRhoPdf, Spectrum, SpectrumError, SpectrumGrid,
+};
+use crate::AppError;
+use sph_comm::{Communicator, ExactSum, ReduceOp};
+use sph_core::Particles;
+use sph_tree::BoundingBox;
+use std::ops::Range;
+use std::path::PathBuf;
+
+/// The spectra of a run, on their schedule.
+#[derive(Debug)]
+pub struct SpectraObserver {
+    schedule: Schedule,
+    /// Rank 0's folder (`None` elsewhere).
+    dir: Option<PathBuf>,
+}
+
+impl SpectraObserver {
+    /// Spectra at every multiple of `every_time` after `t0` (a resumed run
+    /// does not repeat its first part's), into `dir` (rank 0's; `None`
+    /// elsewhere).
+    pub fn new(every_time: f64, t0: f64, dir: Option<PathBuf>) -> Self {
+        Self {
+            schedule: Schedule::new(None, Some(every_time), Vec::new(), t0),
+            dir,
+        }
+    }
+}
+
+/// The spectrum (rank 0 only: `None` elsewhere) and the PDF of the owned
+/// particles of every rank, on a grid of `n_grid` cells per side over the
+/// periodic cube `bbox`. Collective.
+///
+/// # Errors
+/// A box that is not a periodic cube, or particle values the spectrum
+/// refuses (non-finite, negative mass or density).
+pub fn measure<C: Communicator>(
+    p: &Particles,
+    owned: Range<usize>,
+    bbox: &BoundingBox,
+    total: usize,
+    n_grid: usize,
+    comm: &C,
+) -> Result<(Option<Spectrum>, LnRhoPdf), AppError> {
+    let (lo, hi) = (bbox.lo(), bbox.hi());
+    let length = hi[0] - lo[0];
+    let cube = (0..3).all(|d| {
+        bbox.is_periodic(d)
+            && (lo[d] - lo[0]).abs() <= 1e-12 * length
+            && (hi[d] - lo[d] - length).abs() <= 1e-12 * length
+    });
+    if !cube {
+        return Err(AppError::Usage(format!(
+            "spectra need a periodic cube; this run's box is {lo:?} to {hi:?} (periodic: {:?})",
+            [0, 1, 2].map(|d| bbox.is_periodic(d))
+        )));
+    }
+    let r = owned;
+    let (m, vx, vy, vz) = (
+        &p.m[r.clone()],
+        &p.vx[r.clone()],
+        &p.vy[r.clone()],
+        &p.vz[r.clone()],
+    );
+    let failed = |e: SpectrumError| AppError::Usage(format!("spectra: {e}"));
+    let local = agree(Extremes::local(m, vx, vy, vz), comm)?;
+    let mut ext = [local.mass, local.momentum];
+    comm.all_reduce(&mut ext, ReduceOp::Max);
+    let extremes = Extremes {
+        mass: ext[0],
+        momentum: ext[1],
+    };
+    let scale = DepositScale::new(extremes, total as u64).map_err(failed)?;
+    let mut grid = SpectrumGrid::new(n_grid, lo, length, scale).map_err(failed)?;
+    let deposited = grid.deposit(
+        &p.x[r.clone()],
+        &p.y[r.clone()],
+        &p.z[r.clone()],
+        m,
+        vx,
+        vy,
+        vz,
+    );
+    agree(deposited, comm)?;
+    comm.all_reduce(grid.integers_mut(), ReduceOp::Sum);
+    let rho_bar = grid.total_mass() / length.powi(3);
+    let mut pdf = LnRhoPdf::new();
+    agree(pdf.add(m, &p.rho[r], rho_bar), comm)?;
+    ExactSum::all_reduce_many(pdf.sums_mut(), comm);
+    let spectrum = if comm.rank() == 0 {
+        Some(velocity_spectrum(&grid, true).map_err(failed)?)
+    } else {
+        None
+    };
+    Ok((spectrum, pdf))
+}
+
+/// `local` if every rank's part succeeded, else an error on every rank
+/// (this rank's own, or one saying another rank's failed): all ranks then
+/// leave the collective together. Collective.
+fn agree<T, C: Communicator>(local: Result<T, SpectrumError>, comm: &C) -> Result<T, AppError> {
+    let failed = comm.all_reduce_scalar(u64::from(local.is_err()), ReduceOp::Max) > 0;
+    match local {
+        Err(e) => Err(AppError::Usage(format!("spectra: {e}"))),
+        Ok(_) if failed => Err(AppError::Usage(
+            "spectra: another rank's particles were refused".into(),
+        )),
+        Ok(v) => Ok(v),
+    }
+}
+
+impl<C: Communicator> StepObserver<C> for SpectraObserver {
+    fn step(&mut self, view: &StepView<'_, C>) -> Result<Observed, AppError> {
+        let state = view.state;
+        if !self.schedule.due(state.step, state.t) {
+            return Ok(Observed::Recorded);
+        }
+        let (spectrum, pdf) = measure(
+            view.particles,
+            view.owned.clone(),
+            view.bbox,
+            view.total,
+            default_grid(view.total),
+            view.comm,
+        )?;
+        if let (Some(dir), Some(s)) = (&self.dir, spectrum) {
+            std::fs::create_dir_all(dir).map_err(|e| AppError::io(dir, e))?;
+            let step = state.step;
+            write_csv(&dir.join(format!("spectrum_{step:08}.csv")), |w| {
+                write_spectrum_csv(w, &s)
+            })?;
+            write_csv(&dir.join(format!("lnrho_{step:08}.csv")), |w| {
+                write_pdf_csv(w, &pdf)
+            })?;
+        }
+        Ok(Observed::Recorded)
+    }
+}
