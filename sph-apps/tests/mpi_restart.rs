@@ -113,8 +113,15 @@ fn restarted_on_one_and_four(case: &str) {
             files
         };
         let one = spectra("serial");
-        assert!(one.len() >= 4, "spectra: {:?}", one.iter().map(|f| &f.0).collect::<Vec<_>>());
-        assert!(spectra("two") == one, "the 2-rank spectra differ from the serial ones");
+        assert!(
+            one.len() >= 4,
+            "spectra: {:?}",
+            one.iter().map(|f| &f.0).collect::<Vec<_>>()
+        );
+        assert!(
+            spectra("two") == one,
+            "the 2-rank spectra differ from the serial ones"
+        );
     }
     for ranks in [1, 4] {
         let d = root.join(format!("restart-{ranks}"));

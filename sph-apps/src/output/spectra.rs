@@ -25,6 +25,9 @@ pub struct SpectraObserver {
     schedule: Schedule,
     /// Rank 0's folder (`None` elsewhere).
     dir: Option<PathBuf>,
+    /// Rank 0's spectra so far, `(t, (k, E))` up to the Nyquist shell,
+    /// for `spectrum.png`.
+    lines: Vec<crate::plot::SpectrumLine>,
 }
 
 impl SpectraObserver {
@@ -35,6 +38,7 @@ impl SpectraObserver {
         Self {
             schedule: Schedule::new(None, Some(every_time), Vec::new(), t0),
             dir,
+            lines: Vec::new(),
         }
     }
 }
@@ -144,7 +148,26 @@ impl<C: Communicator> StepObserver<C> for SpectraObserver {
             write_csv(&dir.join(format!("lnrho_{step:08}.csv")), |w| {
                 write_pdf_csv(w, &pdf)
             })?;
+            // Complete shells only: up to the grid's Nyquist wavenumber.
+            let nyquist = (default_grid(view.total) / 2) as f64;
+            let points = (s.k.iter().copied().zip(s.e.iter().copied()))
+                .filter(|p| p.0 <= nyquist)
+                .collect();
+            self.lines.push((state.t, points));
         }
         Ok(Observed::Recorded)
+    }
+
+    /// Rank 0 draws `spectra/spectrum.png` from the spectra of this part
+    /// of the run.
+    fn finish(&mut self) -> Result<(), AppError> {
+        match &self.dir {
+            Some(dir) if !self.lines.is_empty() => crate::plot::spectra_png(
+                &dir.join("spectrum.png"),
+                "velocity power spectrum (mass-weighted, TSC deconvolved)",
+                &self.lines,
+            ),
+            _ => Ok(()),
+        }
     }
 }
