@@ -550,6 +550,96 @@ fn render_bench(path: &Path, title: &str, panels: &[BenchPanel]) -> Result<(), B
     Ok(())
 }
 
+/// One spectrum of [`spectra_png`]: its time and `(k, E(k))` points.
+pub type SpectrumLine = (f64, Vec<(f64, f64)>);
+
+/// Writes `spectrum.png`: E(k) against k on log-log axes, one line per
+/// time in `lines` (earlier ones fainter, the last bold), with a `k^-2`
+/// guide (Burgers) through the last line's value at k = 2.
+pub fn spectra_png(path: &Path, title: &str, lines: &[SpectrumLine]) -> Result<(), AppError> {
+    render_spectra(path, title, lines)
+        .map_err(|e| AppError::io(path, std::io::Error::other(e.to_string())))
+}
+
+fn render_spectra(path: &Path, title: &str, lines: &[SpectrumLine]) -> Result<(), Box<dyn Error>> {
+    register_font()?;
+    let positive = |pts: &[(f64, f64)]| -> Vec<(f64, f64)> {
+        pts.iter()
+            .copied()
+            .filter(|p| p.0 > 0.0 && p.1 > 0.0 && p.1.is_finite())
+            .collect()
+    };
+    let all: Vec<(f64, f64)> = lines.iter().flat_map(|l| positive(&l.1)).collect();
+    let (x_lo, x_hi) = log_range(all.iter().map(|p| p.0));
+    let (y_lo, y_hi) = log_range(all.iter().map(|p| p.1));
+    let root = BitMapBackend::new(path, (1000, 800)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let body = root.titled(title, (FAMILY, 26))?;
+    let mut chart = ChartBuilder::on(&body)
+        .margin(8)
+        .margin_right(24)
+        .x_label_area_size(44)
+        .y_label_area_size(90)
+        .build_cartesian_2d(
+            (x_lo..x_hi)
+                .log_scale()
+                .with_key_points(log_ticks(x_lo, x_hi)),
+            (y_lo..y_hi)
+                .log_scale()
+                .with_key_points(log_ticks(y_lo, y_hi)),
+        )?;
+    chart
+        .configure_mesh()
+        .x_desc("k L / 2π")
+        .y_desc("E(k)")
+        .x_label_formatter(&|v| log_tick(*v))
+        .y_label_formatter(&|v| format!("{v:.0e}"))
+        .label_style((FAMILY, 17))
+        .axis_desc_style((FAMILY, 20))
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()?;
+    let n = lines.len();
+    for (i, (t, pts)) in lines.iter().enumerate() {
+        let last = i + 1 == n;
+        let shade = if last {
+            1.0
+        } else {
+            0.15 + 0.5 * i as f64 / n.max(1) as f64
+        };
+        let style = PARTICLE_COLOR
+            .mix(shade)
+            .stroke_width(if last { 3 } else { 1 });
+        let series = chart.draw_series(LineSeries::new(positive(pts), style))?;
+        if last {
+            series
+                .label(format!("t = {t:.3}"))
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], style));
+        }
+    }
+    if let Some((_, pts)) = lines.last() {
+        if let Some(&(_, e2)) = pts.iter().find(|p| p.0 == 2.0) {
+            let guide = move |k: f64| e2 * (k / 2.0).powi(-2);
+            let style = REFERENCE_COLOR.stroke_width(2);
+            chart
+                .draw_series(LineSeries::new(
+                    [x_lo.max(1.0), x_hi].map(|k| (k, guide(k))),
+                    style,
+                ))?
+                .label("k^-2")
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], style));
+        }
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .label_font((FAMILY, 18))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()?;
+    root.present()?;
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -649,94 +739,4 @@ mod tests {
             "{err}"
         );
     }
-}
-
-/// One spectrum of [`spectra_png`]: its time and `(k, E(k))` points.
-pub type SpectrumLine = (f64, Vec<(f64, f64)>);
-
-/// Writes `spectrum.png`: E(k) against k on log-log axes, one line per
-/// time in `lines` (earlier ones fainter, the last bold), with a `k^-2`
-/// guide (Burgers) through the last line's value at k = 2.
-pub fn spectra_png(path: &Path, title: &str, lines: &[SpectrumLine]) -> Result<(), AppError> {
-    render_spectra(path, title, lines)
-        .map_err(|e| AppError::io(path, std::io::Error::other(e.to_string())))
-}
-
-fn render_spectra(path: &Path, title: &str, lines: &[SpectrumLine]) -> Result<(), Box<dyn Error>> {
-    register_font()?;
-    let positive = |pts: &[(f64, f64)]| -> Vec<(f64, f64)> {
-        pts.iter()
-            .copied()
-            .filter(|p| p.0 > 0.0 && p.1 > 0.0 && p.1.is_finite())
-            .collect()
-    };
-    let all: Vec<(f64, f64)> = lines.iter().flat_map(|l| positive(&l.1)).collect();
-    let (x_lo, x_hi) = log_range(all.iter().map(|p| p.0));
-    let (y_lo, y_hi) = log_range(all.iter().map(|p| p.1));
-    let root = BitMapBackend::new(path, (1000, 800)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let body = root.titled(title, (FAMILY, 26))?;
-    let mut chart = ChartBuilder::on(&body)
-        .margin(8)
-        .margin_right(24)
-        .x_label_area_size(44)
-        .y_label_area_size(90)
-        .build_cartesian_2d(
-            (x_lo..x_hi)
-                .log_scale()
-                .with_key_points(log_ticks(x_lo, x_hi)),
-            (y_lo..y_hi)
-                .log_scale()
-                .with_key_points(log_ticks(y_lo, y_hi)),
-        )?;
-    chart
-        .configure_mesh()
-        .x_desc("k L / 2π")
-        .y_desc("E(k)")
-        .x_label_formatter(&|v| log_tick(*v))
-        .y_label_formatter(&|v| format!("{v:.0e}"))
-        .label_style((FAMILY, 17))
-        .axis_desc_style((FAMILY, 20))
-        .light_line_style(RGBColor(235, 235, 235))
-        .draw()?;
-    let n = lines.len();
-    for (i, (t, pts)) in lines.iter().enumerate() {
-        let last = i + 1 == n;
-        let shade = if last {
-            1.0
-        } else {
-            0.15 + 0.5 * i as f64 / n.max(1) as f64
-        };
-        let style = PARTICLE_COLOR
-            .mix(shade)
-            .stroke_width(if last { 3 } else { 1 });
-        let series = chart.draw_series(LineSeries::new(positive(pts), style))?;
-        if last {
-            series
-                .label(format!("t = {t:.3}"))
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], style));
-        }
-    }
-    if let Some((_, pts)) = lines.last() {
-        if let Some(&(_, e2)) = pts.iter().find(|p| p.0 == 2.0) {
-            let guide = move |k: f64| e2 * (k / 2.0).powi(-2);
-            let style = REFERENCE_COLOR.stroke_width(2);
-            chart
-                .draw_series(LineSeries::new(
-                    [x_lo.max(1.0), x_hi].map(|k| (k, guide(k))),
-                    style,
-                ))?
-                .label("k^-2")
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], style));
-        }
-    }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .label_font((FAMILY, 18))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()?;
-    root.present()?;
-    Ok(())
 }
