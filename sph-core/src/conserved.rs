@@ -58,40 +58,27 @@ impl Conserved {
         sums_in: [ExactSum; S],
         comm: &C,
     ) -> (Self, [f64; E], [f64; S]) {
-        let chunks = owned.len().div_ceil(CHUNK);
         let with_phi = !p.phi.is_empty();
-        let mut sums: Vec<ExactSum> = (0..chunks)
-            .into_par_iter()
-            .map(|c| {
-                let mut s: [ExactSum; SUMS] = Default::default();
-                let lo = owned.start + c * CHUNK;
-                for i in lo..(lo + CHUNK).min(owned.end) {
-                    let m = p.m[i];
-                    let v = [p.vx[i], p.vy[i], p.vz[i]];
-                    let x = [p.x[i], p.y[i], p.z[i]];
-                    s[0].add(m);
-                    s[1].add(0.5 * m * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]));
-                    s[2].add(m * p.u[i]);
-                    for k in 0..3 {
-                        s[3 + k].add(m * v[k]);
-                    }
-                    s[6].add(m * (x[1] * v[2] - x[2] * v[1]));
-                    s[7].add(m * (x[2] * v[0] - x[0] * v[2]));
-                    s[8].add(m * (x[0] * v[1] - x[1] * v[0]));
-                    if with_phi {
-                        s[9].add(0.5 * m * p.phi[i]);
-                    }
-                }
-                s
-            })
-            .reduce(Default::default, |mut a, b| {
-                for (x, y) in a.iter_mut().zip(b.iter()) {
-                    x.merge(y);
-                }
-                a
-            })
-            .into_iter()
-            .collect();
+        let o = owned.start;
+        let sums: [ExactSum; SUMS] = exact_sums(owned.len(), |k, s: &mut [ExactSum; SUMS]| {
+            let i = o + k;
+            let m = p.m[i];
+            let v = [p.vx[i], p.vy[i], p.vz[i]];
+            let x = [p.x[i], p.y[i], p.z[i]];
+            s[0].add(m);
+            s[1].add(0.5 * m * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]));
+            s[2].add(m * p.u[i]);
+            for k in 0..3 {
+                s[3 + k].add(m * v[k]);
+            }
+            s[6].add(m * (x[1] * v[2] - x[2] * v[1]));
+            s[7].add(m * (x[2] * v[0] - x[0] * v[2]));
+            s[8].add(m * (x[0] * v[1] - x[1] * v[0]));
+            if with_phi {
+                s[9].add(0.5 * m * p.phi[i]);
+            }
+        });
+        let mut sums: Vec<ExactSum> = sums.into_iter().collect();
         sums.extend(
             extra
                 .iter()
@@ -114,4 +101,30 @@ impl Conserved {
             std::array::from_fn(|k| v[SUMS + E + k]),
         )
     }
+}
+
+/// Exact sums of `terms(i, sums)` over `0..n`, in parallel chunks (the
+/// totals do not depend on the chunking).
+pub(crate) fn exact_sums<const S: usize>(
+    n: usize,
+    terms: impl Fn(usize, &mut [ExactSum; S]) + Sync,
+) -> [ExactSum; S] {
+    (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let mut s: [ExactSum; S] = std::array::from_fn(|_| ExactSum::new());
+            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
+                terms(i, &mut s);
+            }
+            s
+        })
+        .reduce(
+            || std::array::from_fn(|_| ExactSum::new()),
+            |mut a, b| {
+                for (x, y) in a.iter_mut().zip(b.iter()) {
+                    x.merge(y);
+                }
+                a
+            },
+        )
 }

@@ -3,6 +3,7 @@
 //! and the terms of its work.
 
 use super::Hydro;
+use crate::conserved::exact_sums;
 use crate::integrate::velocity_now;
 use crate::stirring::Stirring;
 use crate::{CoreError, Particles};
@@ -11,9 +12,6 @@ use sph_comm::{Communicator, ExactSum};
 use sph_kernels::Kernel;
 use sph_tree::BoundingBox;
 use std::ops::Range;
-
-/// Particles per partial sum.
-const CHUNK: usize = 4096;
 
 impl<K: Kernel, C: Communicator> Hydro<K, C> {
     /// Advances the driving by the last step (at the first step, the first
@@ -130,30 +128,4 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         self.stirring = Some(s);
         Ok(())
     }
-}
-
-/// Exact sums of `terms(i, sums)` over `0..n`, in parallel chunks (the
-/// totals do not depend on the chunking).
-fn exact_sums<const S: usize>(
-    n: usize,
-    terms: impl Fn(usize, &mut [ExactSum; S]) + Sync,
-) -> [ExactSum; S] {
-    (0..n.div_ceil(CHUNK))
-        .into_par_iter()
-        .map(|c| {
-            let mut s: [ExactSum; S] = std::array::from_fn(|_| ExactSum::new());
-            for i in c * CHUNK..((c + 1) * CHUNK).min(n) {
-                terms(i, &mut s);
-            }
-            s
-        })
-        .reduce(
-            || std::array::from_fn(|_| ExactSum::new()),
-            |mut a, b| {
-                for (x, y) in a.iter_mut().zip(b.iter()) {
-                    x.merge(y);
-                }
-                a
-            },
-        )
 }
