@@ -136,6 +136,33 @@ pub fn load<C: Communicator>(
     Ok((p, total, bbox))
 }
 
+/// What snapshot `spec` (`FILE[:K]`) says of its physics, for a scene of
+/// the user's own ([`crate::cases::scene`]): the attributes of its step
+/// group, or of a SWIFT/GADGET file its box `[0, BoxSize)` alone.
+///
+/// # Errors
+/// An unreadable file or step, or an attribute of the wrong shape.
+pub fn attributes(spec: &str) -> Result<crate::cases::scene::FileAttrs, AppError> {
+    use crate::cases::scene::FileAttrs;
+    let (path, k) = checkpoint::split_spec(spec)?;
+    if sph_io::swift::looks_like_swift(&path) {
+        let l = sph_io::swift::read_swift(&path)?.particles.box_size;
+        return Ok(FileAttrs {
+            bbox: Some([0.0, l[0], 0.0, l[1], 0.0, l[2]]),
+            ..FileAttrs::default()
+        });
+    }
+    let count = sph_io::foreign::step_count(&path).map_err(|e| {
+        AppError::Usage(format!(
+            "--init {}: neither an H5Part file ({e}) nor a SWIFT/GADGET file (no group 'Header')",
+            path.display()
+        ))
+    })?;
+    let index = k.map_or(count.saturating_sub(1), |k| k as usize);
+    let head = sph_io::foreign::read_foreign_rows(&path, index, &[], &[], 0..0)?;
+    FileAttrs::of(&path.display().to_string(), &head)
+}
+
 /// [`load`] of a SWIFT/GADGET file.
 fn load_swift<C: Communicator>(
     comm: &C,

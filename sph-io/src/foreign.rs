@@ -27,6 +27,10 @@ pub struct ForeignStep {
     /// Attribute `box` (`xmin, xmax, ymin, ymax, zmin, zmax`), if present
     /// with 6 numbers.
     pub bbox: Option<[f64; 6]>,
+    /// Every attribute of the step group that reads as numbers (a scalar
+    /// or a 1-D array: SPH-EXA's `gamma`, `gravConstant`, `boundaryType`,
+    /// ours `periodic`, ...), sorted by name.
+    pub numbers: Vec<(String, Vec<f64>)>,
     /// Rows of every dataset (the length of the first requested field).
     pub total: u64,
     /// Names of all the step's datasets.
@@ -36,6 +40,14 @@ pub struct ForeignStep {
 }
 
 impl ForeignStep {
+    /// The numbers of attribute `name`, if the step has it as numbers.
+    pub fn number(&self, name: &str) -> Option<&[f64]> {
+        self.numbers
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v.as_slice())
+    }
+
     /// Field `name`, if it was read.
     pub fn field(&self, name: &str) -> Option<&[f64]> {
         self.fields
@@ -86,12 +98,22 @@ pub fn read_foreign_rows(
         .and_then(AttrValue::to_f64s)
         .filter(|v| v.len() == 6)
         .map(|v| [v[0], v[1], v[2], v[3], v[4], v[5]]);
+    let mut numbers: Vec<(String, Vec<f64>)> = attrs
+        .iter()
+        .filter_map(|(k, v)| {
+            // Integers (e.g. SPH-EXA's int8 `boundaryType`) as exact f64s.
+            let ints = || Some(v.to_i64s()?.into_iter().map(|i| i as f64).collect());
+            Some((k.clone(), v.to_f64s().or_else(ints)?))
+        })
+        .collect();
+    numbers.sort_by(|a, b| a.0.cmp(&b.0));
     let mut step = ForeignStep {
         group: gname.clone(),
         time: num("time"),
         iteration: attrs.get("iteration").and_then(AttrValue::as_u64),
         dt: num("minDt"),
         bbox,
+        numbers,
         total: 0,
         datasets: datasets.clone(),
         fields: Vec::new(),

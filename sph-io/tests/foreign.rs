@@ -20,6 +20,14 @@ fn sphexa_layout_reads_with_conversions_and_row_ranges() {
         (Some(1.25), Some(11), Some(1e-3), 10)
     );
     assert_eq!(s.bbox, Some([-1.0, 1.0, -2.0, 2.0, -3.0, 3.0]));
+    // Every numeric attribute, integers and f32 widened exactly, by name;
+    // strings are not numbers.
+    assert_eq!(s.number("boundaryType"), Some(&[1.0, 0.0, 1.0][..]));
+    assert_eq!(s.number("gamma"), Some(&[1.5][..]));
+    assert_eq!(s.number("minDt"), Some(&[1e-3][..]));
+    assert_eq!(s.number("kernelChoice"), None);
+    let names: Vec<&str> = s.numbers.iter().map(|(n, _)| n.as_str()).collect();
+    assert!(names.windows(2).all(|w| w[0] < w[1]), "sorted: {names:?}");
     assert_eq!(s.field("x").unwrap(), &[1.2, 1.3, 1.4]);
     // f32 values widen exactly: 0.5 + i/8 is exact in f32.
     assert_eq!(s.field("h").unwrap(), &[0.75, 0.875, 1.0]);

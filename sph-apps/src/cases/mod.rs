@@ -24,6 +24,7 @@ use crate::AppError;
 use sph_core::{FieldSet, HydroConfig, Particles};
 use sph_tree::BoundingBox;
 
+pub mod scene;
 pub(crate) mod scheme;
 pub(crate) mod scheme_options;
 pub(crate) mod setup;

@@ -3,6 +3,7 @@
 //! value), so that no subcommand ever sees one.
 
 use crate::cases;
+use crate::cases::scene::SceneGravity;
 use crate::output::snapshot as snapfile;
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use sph_core::Choice;
@@ -170,6 +171,107 @@ pub(crate) fn parse_stir(s: &str) -> Result<StirArg, String> {
 /// The value of `--stir`: the driving, or none (`off`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct StirArg(pub(crate) Option<sph_core::stirring::StirParams>);
+
+/// `LO:HI` with LO < HI, both finite.
+pub(crate) fn parse_interval(s: &str) -> Result<(f64, f64), String> {
+    let bad = || format!("'{s}': expected LO:HI with finite numbers LO < HI, e.g. -0.5:0.5");
+    let (a, b) = s.split_once(':').ok_or_else(bad)?;
+    let (lo, hi): (f64, f64) = (
+        a.trim().parse().map_err(|_| bad())?,
+        b.trim().parse().map_err(|_| bad())?,
+    );
+    if lo.is_finite() && hi.is_finite() && lo < hi {
+        Ok((lo, hi))
+    } else {
+        Err(bad())
+    }
+}
+
+/// `--box`: `LO:HI` (the same on every axis) or `X0:X1,Y0:Y1,Z0:Z1`, as
+/// `xmin, xmax, ymin, ymax, zmin, zmax`.
+pub(crate) fn parse_box(s: &str) -> Result<BoxArg, String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    let axes = match parts.as_slice() {
+        [one] => [parse_interval(one)?; 3],
+        [x, y, z] => [parse_interval(x)?, parse_interval(y)?, parse_interval(z)?],
+        _ => {
+            return Err(format!(
+                "'{s}': expected LO:HI (a cube) or X0:X1,Y0:Y1,Z0:Z1"
+            ))
+        }
+    };
+    Ok(BoxArg(
+        axes.map(|(lo, hi)| [lo, hi])
+            .concat()
+            .try_into()
+            .expect("6 numbers"),
+    ))
+}
+
+/// The value of `--box`: `xmin, xmax, ymin, ymax, zmin, zmax`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct BoxArg(pub(crate) [f64; 6]);
+
+/// `X0:X1,Y0:Y1,Z0:Z1`, which [`parse_box`] reads back to the same bits.
+impl std::fmt::Display for BoxArg {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let b = self.0;
+        write!(f, "{}:{},{}:{},{}:{}", b[0], b[1], b[2], b[3], b[4], b[5])
+    }
+}
+
+/// `--boundary`: `periodic`, `open`, or one of them per axis
+/// (`periodic,periodic,open`).
+pub(crate) fn parse_boundary(s: &str) -> Result<BoundaryArg, String> {
+    let kind = |w: &str| {
+        match w.trim() {
+        "periodic" => Ok(sph_tree::Boundary::Periodic),
+        "open" => Ok(sph_tree::Boundary::Open),
+        other => Err(format!(
+            "'{other}' in '{s}': expected periodic or open (one for every axis, or one per axis: periodic,periodic,open)"
+        )),
+    }
+    };
+    let parts: Vec<&str> = s.split(',').collect();
+    match parts.as_slice() {
+        [one] => Ok(BoundaryArg([kind(one)?; 3])),
+        [x, y, z] => Ok(BoundaryArg([kind(x)?, kind(y)?, kind(z)?])),
+        _ => Err(format!(
+            "'{s}': expected periodic, open, or three of them (x,y,z), e.g. periodic,periodic,open"
+        )),
+    }
+}
+
+/// The value of `--boundary`: the kind of each axis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct BoundaryArg(pub(crate) [sph_tree::Boundary; 3]);
+
+/// `periodic,periodic,open`, which [`parse_boundary`] reads back.
+impl std::fmt::Display for BoundaryArg {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let name = |b: sph_tree::Boundary| match b {
+            sph_tree::Boundary::Periodic => "periodic",
+            sph_tree::Boundary::Open => "open",
+        };
+        let [x, y, z] = self.0.map(name);
+        write!(f, "{x},{y},{z}")
+    }
+}
+
+/// `--gravity`: `on`, `off`, or the gravitational constant G (a positive
+/// number, which turns it on).
+pub(crate) fn parse_gravity(s: &str) -> Result<SceneGravity, String> {
+    match s.trim() {
+        "on" => Ok(SceneGravity::On),
+        "off" => Ok(SceneGravity::Off),
+        g => match g.parse::<f64>() {
+            Ok(v) if v.is_finite() && v > 0.0 => Ok(SceneGravity::Constant(v)),
+            _ => Err(format!(
+                "'{g}': expected on, off, or the gravitational constant G (a positive number)"
+            )),
+        },
+    }
+}
 
 /// Particles per side, within [`SIDE_RANGE`].
 pub(crate) fn parse_side(s: &str) -> Result<usize, String> {

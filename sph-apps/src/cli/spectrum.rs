@@ -3,7 +3,7 @@
 //! that both codes of a side-by-side are measured by one program
 //! ([`crate::spectrum`]).
 
-use super::parse::parse_count;
+use super::parse::{parse_count, parse_interval};
 use crate::checkpoint::split_spec;
 use crate::spectrum::{
     default_grid, slope, velocity_spectrum, write_csv, write_pdf_csv, write_spectrum_csv,
@@ -25,7 +25,7 @@ pub(crate) struct SpectrumArgs {
     #[arg(long, value_name = "N", value_parser = parse_count)]
     grid: Option<usize>,
     /// The cube `LO:HI` on every axis, for files without a `box` attribute.
-    #[arg(long = "box", value_name = "LO:HI", value_parser = parse_interval)]
+    #[arg(long = "box", value_name = "LO:HI", allow_hyphen_values = true, value_parser = parse_interval)]
     cube: Option<(f64, f64)>,
     /// Leave the spectrum convolved with the deposit's window (TSC), not
     /// divided by it.
@@ -36,21 +36,6 @@ pub(crate) struct SpectrumArgs {
     /// snapshot's folder, the files named after it.
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
-}
-
-/// `LO:HI` with LO < HI, both finite.
-fn parse_interval(s: &str) -> Result<(f64, f64), String> {
-    let bad = || format!("'{s}': expected LO:HI with finite numbers LO < HI, e.g. -0.5:0.5");
-    let (a, b) = s.split_once(':').ok_or_else(bad)?;
-    let (lo, hi): (f64, f64) = (
-        a.trim().parse().map_err(|_| bad())?,
-        b.trim().parse().map_err(|_| bad())?,
-    );
-    if lo.is_finite() && hi.is_finite() && lo < hi {
-        Ok((lo, hi))
-    } else {
-        Err(bad())
-    }
 }
 
 /// The fields a spectrum reads.

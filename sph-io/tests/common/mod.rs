@@ -17,6 +17,9 @@ pub fn sphexa_bytes(n: usize) -> Vec<u8> {
         g.set_attr("time", AttrValue::F64(0.25 + k as f64));
         g.set_attr("iteration", AttrValue::I64(10 + k as i64));
         g.set_attr("minDt", AttrValue::F64(1e-3));
+        g.set_attr("boundaryType", AttrValue::I8Array(vec![1, 0, 1]));
+        g.set_attr("gamma", AttrValue::F32(1.5));
+        g.set_attr("kernelChoice", AttrValue::String("sinc".into()));
         g.set_attr(
             "box",
             AttrValue::F64Array(vec![-1.0, 1.0, -2.0, 2.0, -3.0, 3.0]),

@@ -3,12 +3,14 @@
 //! their values from [`sph_core::Choice`]).
 
 use super::scheme_args::{SchemeArgs, HEADING};
+use crate::cases::scene::SceneGravity;
 use crate::cli::parse::{
     case_names, choice, parse_checkpoint_every, parse_count, parse_courant, parse_duration,
     parse_eos, parse_field_list, parse_keep, parse_kernel, parse_non_negative, parse_positive,
     parse_side, parse_steps, parse_stir, parse_threads, parse_times, snapshot_fields_help,
     CheckpointSpec, FieldList, StirArg, Times,
 };
+use crate::cli::parse::{parse_boundary, parse_box, parse_gravity, BoundaryArg, BoxArg};
 use clap::{Args, Parser, ValueEnum};
 use sph_core::timestep::FirstStep;
 use sph_core::Eos;
@@ -41,7 +43,8 @@ pub(crate) const DEFAULT_MOMENTUM_BOUND: f64 = 1e-10;
 #[derive(Args, Debug)]
 pub(crate) struct RunArgs {
     /// Test case (`sphexa cases` lists each with its defaults). Required
-    /// unless --config or --restart names it.
+    /// unless --config or --restart names it, or --init FILE gives a scene
+    /// of your own.
     #[arg(value_parser = case_names())]
     pub(crate) case: Option<String>,
     /// Particles per side of the initial lattice, 4 to 1000 (default: the
@@ -243,17 +246,40 @@ pub(crate) struct RunArgs {
     /// timings.csv and summary.json cover the continued part.
     #[arg(long, value_name = "FILE[:STEP]", conflicts_with = "init")]
     pub(crate) restart: Option<String>,
-    /// Start the case from the particles of snapshot FILE (Step#K, default
-    /// the last): ours, or an H5Part file of SPH-EXA (group Step#K with 1-D
+    /// Start from the particles of snapshot FILE (Step#K, default the
+    /// last): ours, or an H5Part file of SPH-EXA (group Step#K with 1-D
     /// datasets x, y, z, h, m, u and optionally vx, vy, vz, id, any float
     /// or integer type; the box from attribute `box` if present), or a
     /// SWIFT/GADGET file (IC or snapshot: Header/BoxSize, PartType0 gas
     /// only; its box [0, BoxSize) is centred on the case's, its smoothing
     /// lengths converted from SWIFT's convention for its kernel, cubic
-    /// spline if unnamed; values in the file's units). Time starts at 0;
-    /// the case supplies the scheme and the reference.
+    /// spline if unnamed; values in the file's units). Time starts at 0.
+    /// With a case, the case supplies the physics, the scheme and the
+    /// reference. Without one, the file is a scene of your own: the
+    /// physics comes from --boundary, --box, --eos, --gravity and
+    /// --softening or else from the file's attributes (`periodic` or
+    /// `boundaryType`, `box`, `gamma`, `gravConstant`), and --end-time or
+    /// --steps is needed; what matters and is not said is an error that
+    /// names the option (the scheme: `best`).
     #[arg(long, value_name = "FILE[:K]")]
     pub(crate) init: Option<String>,
+    /// A scene's boundaries (--init FILE without a case): `periodic`,
+    /// `open`, or one per axis, e.g. `periodic,periodic,open` (default:
+    /// the file's `periodic` or `boundaryType` attribute).
+    #[arg(long, value_name = "KINDS", value_parser = parse_boundary)]
+    pub(crate) boundary: Option<BoundaryArg>,
+    /// A scene's box (--init FILE without a case): `LO:HI` on every axis or
+    /// `X0:X1,Y0:Y1,Z0:Z1` (default: the file's `box` attribute; needed for
+    /// periodic axes, open axes follow the particles).
+    #[arg(long = "box", value_name = "LO:HI", allow_hyphen_values = true, value_parser = parse_box)]
+    pub(crate) cube: Option<BoxArg>,
+    /// A scene's self-gravity (--init FILE without a case): `on` (open
+    /// boundaries only; G from the file's `gravConstant`, else 1), the
+    /// constant G itself (a positive number, on), or `off` (default: the
+    /// file's `gravConstant`, non-zero for on; a periodic box has none; an
+    /// open box must say).
+    #[arg(long, value_name = "on|off|G", allow_hyphen_values = true, value_parser = parse_gravity)]
+    pub(crate) gravity: Option<SceneGravity>,
     /// Read options from a TOML file: one key per option, named as the
     /// option without its dashes (`side = 20`, `end-time = 0.05`,
     /// `av-switches = "on"`, `snapshot-at = [0.01, 0.02]`, `case =

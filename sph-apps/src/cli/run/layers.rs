@@ -150,7 +150,15 @@ mod tests {
         .expect("options")
         .args;
         let config = HydroConfig::default();
-        let t = resolved_config(&a, "sedov", 8, Stop::Steps(5), Path::new("out"), &config);
+        let t = resolved_config(
+            &a,
+            "sedov",
+            8,
+            Stop::Steps(5),
+            Path::new("out"),
+            &config,
+            None,
+        );
         toml::to_string(&t).expect("TOML")
     }
 

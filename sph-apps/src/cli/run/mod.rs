@@ -104,15 +104,77 @@ fn launched_ranks() -> Option<usize> {
         .find_map(|k| std::env::var(k).ok()?.trim().parse().ok())
 }
 
+/// Refuses the options of a scene of the user's own (`--box`,
+/// `--boundary`, `--gravity`) in a run of case `name`, which has its own.
+fn refuse_scene_options(a: &RunArgs, name: &str) -> Result<(), AppError> {
+    let given = [
+        ("--box", a.cube.is_some()),
+        ("--boundary", a.boundary.is_some()),
+        ("--gravity", a.gravity.is_some()),
+    ];
+    match given.iter().find(|g| g.1) {
+        Some((option, _)) => Err(AppError::Usage(format!(
+            "{option} describes a scene of your own (--init FILE without a case); case '{name}' has its own box, boundaries and gravity (see `sphexa cases`)"
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// The scene of `source` (the option that names its file, for messages;
+/// the file's attributes `file`) with the physics the options `a` give.
+/// `--side` has no meaning for it and is refused.
+fn user_scene(
+    a: &RunArgs,
+    source: &str,
+    file: &cases::scene::FileAttrs,
+) -> Result<cases::scene::UserScene, AppError> {
+    if let Some(n) = a.side {
+        return Err(AppError::Usage(format!(
+            "{source}: --side {n} has no meaning for a scene of your own, whose particles are the file's; leave --side out"
+        )));
+    }
+    let opts = cases::scene::SceneOptions {
+        eos: a.eos,
+        bbox: a.cube.map(|b| b.0),
+        boundary: a.boundary.map(|b| b.0),
+        gravity: a.gravity,
+        softening: a.softening,
+    };
+    cases::scene::UserScene::resolve(source, file, &opts, a.end_time.unwrap_or(f64::INFINITY))
+}
+
 /// Runs the case of the resolved options `a`.
 fn execute(a: RunArgs) -> Result<(), AppError> {
-    let Some(case_name) = a.case.clone() else {
-        return Err(AppError::Usage(format!(
-            "no case given: name one ({}), or give --config FILE or --restart FILE",
-            cases::names().join(", ")
-        )));
+    let user_scene = match (&a.case, &a.init, &a.restart) {
+        (Some(name), _, _) => {
+            refuse_scene_options(&a, name)?;
+            None
+        }
+        (None, Some(spec), _) => Some(user_scene(
+            &a,
+            &format!("--init {spec} (no case)"),
+            &crate::init::attributes(spec)?,
+        )?),
+        // A scene's checkpoint: its config.toml holds the whole physics.
+        (None, None, Some(spec)) => {
+            Some(user_scene(
+            &a,
+            &format!("--restart {spec} (a scene)"),
+            &cases::scene::FileAttrs::default(),
+        )?)
+        }
+        (None, None, None) => {
+            return Err(AppError::Usage(format!(
+                "no case given: name one ({}), give --init FILE for a scene of your own, or give --config FILE or --restart FILE",
+                cases::names().join(", ")
+            )))
+        }
     };
-    let case = cases::lookup(&case_name)?;
+    let case: &dyn cases::Case = match (&user_scene, &a.case) {
+        (Some(s), _) => s,
+        (None, Some(name)) => cases::lookup(name)?,
+        (None, None) => unreachable!("a run without a case is a scene"),
+    };
     let side = a.side.unwrap_or(case.default_side());
     if a.ng0 < 8 || a.ng0 > a.ngmax {
         return Err(AppError::Usage(format!(
@@ -145,14 +207,24 @@ fn execute(a: RunArgs) -> Result<(), AppError> {
     // Kept only by cases with self-gravity.
     config.gravity = Some(sph_gravity::GravityParams {
         theta: a.theta,
+        g: user_scene.as_ref().map_or(1.0, |s| s.g),
         ..Default::default()
     });
+    // A scene's first step is the criteria's: it has no case to size one.
+    if user_scene.is_some() && a.first_step.is_none() {
+        config.timestep.first_step = sph_core::timestep::FirstStep::Criteria;
+    }
     config.neighbors.ng0 = a.ng0;
     config.neighbors.ngmax = a.ngmax;
     config.bin_report = a.report_bins;
     let stop = match (a.steps, a.end_time) {
         (Some(s), _) => Stop::Steps(s),
         (None, Some(t)) => Stop::Time(t),
+        (None, None) if user_scene.is_some() => {
+            return Err(AppError::Usage(
+                "a scene of your own (--init FILE without a case) has no default end: give --end-time T or --steps N".into(),
+            ))
+        }
         (None, None) => Stop::Time(case.default_end_time()),
     };
     #[cfg(not(feature = "mpi"))]
@@ -207,11 +279,36 @@ fn execute(a: RunArgs) -> Result<(), AppError> {
         let (p, total, bbox) = crate::init::load(&comm, spec, scene.config.fields(), &scene.bbox)?;
         scene.particles = p;
         scene.total = total;
-        if let Some(b) = bbox {
-            scene.bbox = b;
+        match (bbox, &user_scene) {
+            // A scene keeps the box and boundaries it resolved, the
+            // options' over the file's.
+            (_, Some(_)) if a.cube.is_some() => {}
+            (Some(b), Some(s)) => {
+                scene.bbox = sph_tree::BoundingBox::new(b.lo(), b.hi(), s.bbox.boundary())?
+            }
+            (Some(b), None) => scene.bbox = b,
+            (None, _) => {}
         }
     }
-    let resolved = resolved::resolved_config(&a, case.name(), side, stop, &out, &scene.config);
+    let scene_keys = user_scene.as_ref().map(|s| resolved::SceneKeys {
+        boundary: s.bbox.boundary(),
+        cube: (a.cube.is_some() || s.bbox.boundary().contains(&sph_tree::Boundary::Periodic)).then(
+            || {
+                let (lo, hi) = (scene.bbox.lo(), scene.bbox.hi());
+                [lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]]
+            },
+        ),
+        g: scene.config.gravity.map(|g| g.g),
+    });
+    let resolved = resolved::resolved_config(
+        &a,
+        case.name(),
+        side,
+        stop,
+        &out,
+        &scene.config,
+        scene_keys.as_ref(),
+    );
     let config_text = toml::to_string(&resolved).expect("a TOML table serialises");
     if root {
         let path = out.join("config.toml");

@@ -4,10 +4,24 @@
 
 use super::args::{CurveArg, FormatArg, RunArgs, DEFAULT_MOMENTUM_BOUND};
 use super::scheme::toml_value;
+use crate::cases::scene::SceneGravity;
 use crate::cases::SCHEME_OPTIONS;
+use crate::cli::parse::{BoundaryArg, BoxArg};
 use crate::simulation::Stop;
 use sph_core::{Choice, HydroConfig};
 use std::path::Path;
+
+/// What a scene of the user's own resolved (`--init FILE` without a case):
+/// its config.toml keeps it, so that `--config` and `--restart` repeat the
+/// physics without reading the file's attributes again.
+pub(crate) struct SceneKeys {
+    /// The boundary of each axis.
+    pub(crate) boundary: [sph_tree::Boundary; 3],
+    /// The box, where it is needed (periodic axes) or was given.
+    pub(crate) cube: Option<[f64; 6]>,
+    /// The gravitational constant with self-gravity, or none.
+    pub(crate) g: Option<f64>,
+}
 
 /// The fully resolved configuration of a run: every option with the value
 /// it ran with (scheme options as the case and the overrides made them), so
@@ -19,14 +33,31 @@ pub(crate) fn resolved_config(
     stop: Stop,
     out: &Path,
     config: &HydroConfig,
+    scene: Option<&SceneKeys>,
 ) -> toml::Table {
     use toml::Value;
     let mut t = toml::Table::new();
     let mut set = |k: &str, v: Value| {
         t.insert(k.to_owned(), v);
     };
-    set("case", Value::String(case.into()));
-    set("side", Value::Integer(side as i64));
+    match scene {
+        // No case: `--init` (or the checkpoint) and the physics below.
+        Some(k) => {
+            set(
+                "boundary",
+                Value::String(BoundaryArg(k.boundary).to_string()),
+            );
+            if let Some(b) = k.cube {
+                set("box", Value::String(BoxArg(b).to_string()));
+            }
+            let gravity = k.g.map_or(SceneGravity::Off, SceneGravity::Constant);
+            set("gravity", Value::String(gravity.to_string()));
+        }
+        None => {
+            set("case", Value::String(case.into()));
+            set("side", Value::Integer(side as i64));
+        }
+    }
     match stop {
         Stop::Steps(n) => set("steps", Value::Integer(n as i64)),
         Stop::Time(te) => set("end-time", Value::Float(te)),
