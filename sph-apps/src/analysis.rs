@@ -67,7 +67,7 @@ fn flow_speed(reference: Option<&Reference>, p: &Particles, i: usize) -> f64 {
 
 /// `n` exact sums over the owned particles of every rank: `add(i, sums)`
 /// adds particle `i`'s terms. One all-reduce.
-fn exact_sums<C, F>(owned: Range<usize>, n: usize, comm: &C, add: F) -> Vec<ExactSum>
+pub(crate) fn exact_sums<C, F>(owned: Range<usize>, n: usize, comm: &C, add: F) -> Vec<ExactSum>
 where
     C: Communicator,
     F: Fn(usize, &mut [ExactSum]) + Sync,

@@ -354,9 +354,9 @@ impl<C: Communicator> Simulation<C> {
         let mut outputs = self.open_outputs(stop, out, progress)?;
         if let Some(w) = self.watch.as_mut() {
             let all = 0..self.scene.particles.len();
-            let reads_u = self.scene.config.eos.uses_internal_energy();
+            let eos = self.scene.config.eos;
             let comm = self.hydro.domain().comm();
-            w.check_initial(&self.scene.particles, all, comm, root, reads_u)?;
+            w.check_initial(&self.scene.particles, all, comm, root, &eos)?;
         }
         let mut tally = Tally::new(n);
         let start = outputs.start;
@@ -543,7 +543,8 @@ impl<C: Communicator> Simulation<C> {
             bins: totals.bins(),
             l1: end.l1,
             energy_rel_drift: (end.conserved.e_tot() - first.e_tot() - work)
-                / (first.e_tot().abs() + work.abs()),
+                / (watch::energy_scale(&first, self.watch.as_ref().and_then(Watch::thermal_scale))
+                    + work.abs()),
             injected_work: self.hydro.config().stirring.map(|_| work),
             momentum_rel_drift: if scale_p > 0.0 { dp / scale_p } else { dp },
             angular_momentum_rel_drift: if l_scale > 0.0 { dl / l_scale } else { dl },

@@ -7,7 +7,11 @@
 //!
 //! The per-step check reads only the step's [`Conserved`] sums, which every
 //! rank already has, so it costs no communication; the reductions that find
-//! the particle to blame run only on the step that crosses a bound.
+//! the particle to blame run only on the step that crosses a bound. The
+//! energy drift `E - E_0 - W` is measured against `|E_0|`, or, where the
+//! equation of state fixes u by the density (isothermal, polytropic: an
+//! internal energy with an arbitrary zero), against the gas's thermal
+//! energy `sum m c^2` (one sum at the first step; [`energy_scale`]).
 //!
 //! The initial particles are checked too ([`Watch::check_initial`]): a
 //! non-finite position, velocity, mass, smoothing length or internal energy,
@@ -15,6 +19,7 @@
 //! the particle named; a mass <= 0 is a violation of `particle mass` (a
 //! warning, an error with `strict`).
 
+use crate::analysis::exact_sums;
 use crate::output::observer::{Observed, StepObserver, StepView};
 use crate::AppError;
 use serde::Serialize;
@@ -152,7 +157,26 @@ pub struct Watch {
     last_work: f64,
     work_through: f64,
     momentum_scale: f64,
+    /// `sum m c^2` of the first step where the equation of state fixes u
+    /// by the density (isothermal, polytropic): their internal energy has
+    /// an arbitrary zero, so `|E_0|` is no scale for the energy drift.
+    thermal: Option<f64>,
+    barotropic: bool,
     violations: Vec<Violation>,
+}
+
+/// The scale of the energy drift `E - E_0 - W` from the first step's
+/// sums: `|E_0|`, or where that is 0 the sum of the parts' magnitudes. A
+/// gas whose EOS fixes u by the density (`thermal = Some(sum m c^2)`) has an
+/// internal energy with an arbitrary zero (`c0^2 ln rho` is 0 at rho = 1):
+/// its scale is `E_kin + |E_grav| + sum m c^2`, the energy pressure can
+/// exchange with the flow. The stirring's work is added by the callers.
+pub fn energy_scale(first: &Conserved, thermal: Option<f64>) -> f64 {
+    match thermal {
+        Some(t) => first.e_kin + first.e_grav.abs() + t,
+        None if first.e_tot() != 0.0 => first.e_tot().abs(),
+        None => first.e_kin + first.e_int.abs() + first.e_grav.abs(),
+    }
 }
 
 impl Default for Watch {
@@ -172,8 +196,16 @@ impl Watch {
             last_work: 0.0,
             work_through: 0.0,
             momentum_scale: 0.0,
+            thermal: None,
+            barotropic: false,
             violations: Vec::new(),
         }
+    }
+
+    /// `sum m c^2` of the first step for an EOS that fixes u by the
+    /// density (the energy drift's scale, [`energy_scale`]), else `None`.
+    pub fn thermal_scale(&self) -> Option<f64> {
+        self.thermal
     }
 
     /// The violations so far.
@@ -190,9 +222,11 @@ impl Watch {
         }
     }
 
-    /// Checks the initial particles (`owned` of `p`). Collective.
-    /// `internal_energy`: the equation of state reads u (a negative u is
-    /// refused only then; e.g. the Tait EOS ignores it).
+    /// Checks the initial particles (`owned` of `p`) of a run with
+    /// equation of state `eos`. Collective. A negative u is refused only
+    /// where the EOS reads u (e.g. the Tait EOS ignores it); where the EOS
+    /// fixes u by the density, the energy drift is measured against the
+    /// gas's thermal energy `sum m c^2` (see [`energy_scale`]).
     ///
     /// # Errors
     /// A non-finite value or a smoothing length <= 0 or a negative internal
@@ -204,8 +238,10 @@ impl Watch {
         owned: Range<usize>,
         comm: &C,
         root: bool,
-        internal_energy: bool,
+        eos: &sph_core::Eos,
     ) -> Result<(), AppError> {
+        let internal_energy = eos.uses_internal_energy();
+        self.barotropic = eos.energy(1.0).is_some();
         let bad_value = |i: usize| -> Option<String> {
             let fields = [
                 ("x", p.x[i]),
@@ -310,6 +346,12 @@ impl Watch {
                 particle: blame,
             });
         }
+        if self.first.is_none() && self.barotropic {
+            let s = exact_sums(owned.clone(), 1, comm, |i, s| {
+                s[0].add(p.m[i] * p.c[i] * p.c[i])
+            });
+            self.thermal = Some(s[0].value());
+        }
         let (first, w0) = *self.first.get_or_insert_with(|| {
             self.last_work = r.external_work;
             (c, r.external_work)
@@ -331,13 +373,8 @@ impl Watch {
         }
         // A driven run conserves E - W (W the stirring's work); its scale
         // grows by the energy that went through the forcing.
-        let e0 = first.e_tot();
-        let e_scale = if e0 != 0.0 {
-            e0.abs()
-        } else {
-            first.e_kin + first.e_int.abs() + first.e_grav.abs()
-        } + self.work_through;
-        let change = c.e_tot() - e0 - (r.external_work - w0);
+        let e_scale = energy_scale(&first, self.thermal) + self.work_through;
+        let change = c.e_tot() - first.e_tot() - (r.external_work - w0);
         let drift = if e_scale > 0.0 {
             change.abs() / e_scale
         } else {
@@ -562,7 +599,13 @@ mod tests {
         p.u[3] = -1.0;
         let mut w = Watch::default();
         let e = w
-            .check_initial(&p, 0..4, &SerialComm::new(), false, true)
+            .check_initial(
+                &p,
+                0..4,
+                &SerialComm::new(),
+                false,
+                &sph_core::Eos::IdealGas { gamma: 1.4 },
+            )
             .unwrap_err()
             .to_string();
         assert!(e.contains("id 11") && e.contains("u >= 0"), "{e}");

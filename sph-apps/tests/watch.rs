@@ -271,3 +271,46 @@ fn a_driven_run_is_checked_against_its_work() {
     assert!(v["injected_work"].as_f64().unwrap() > 0.0, "{v}");
     assert!(v["energy_rel_drift"].as_f64().unwrap().abs() < 1e-2, "{v}");
 }
+
+/// An isothermal gas has `u = c^2 ln rho`, an internal energy with an
+/// arbitrary zero (0 at rho = 1): the glass at rest, undriven, has a tiny
+/// `E_0` (its density noise), against which its own relaxation drifts by
+/// over 1%. The watch measures the drift against the gas's thermal energy
+/// `sum m c^2` instead, so `--strict` runs it through, and summary.json
+/// reports the drift on that scale.
+#[test]
+fn an_isothermal_gas_at_rest_is_checked_against_its_thermal_energy() {
+    let dir = scratch("isothermal");
+    let out = dir.join("turbulence");
+    let o = sphexa(&[
+        "run",
+        "turbulence",
+        "-n",
+        "12",
+        "--stir",
+        "off",
+        "--end-time",
+        "1",
+        "--strict",
+        "-q",
+        "--out",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let csv = std::fs::read_to_string(out.join("conserved.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let e_col = header.iter().position(|h| *h == "E_tot").unwrap();
+    let e: Vec<f64> = lines
+        .map(|l| l.split(',').nth(e_col).unwrap().parse().unwrap())
+        .collect();
+    let (e0, e1) = (e[0], e[e.len() - 1]);
+    // Measured 1.5e-2: |E_0| is no scale here.
+    assert!(
+        (e1 - e0).abs() / e0.abs() > 1e-2,
+        "E {e0} -> {e1}: the plain drift is within the bound"
+    );
+    // M c^2 = 1: measured 1.1e-5.
+    let drift = summary(&out)["energy_rel_drift"].as_f64().unwrap();
+    assert!(drift.abs() < 1e-3, "energy_rel_drift {drift}");
+}
