@@ -143,7 +143,7 @@ fn restarted_on_one_and_four(case: &str) {
 /// give on 2 ranks the conserved quantities of the serial run.
 #[test]
 fn initial_conditions_from_files_on_two_ranks() {
-    use hdf5_pure::{AttrValue, FileBuilder};
+    use hdf5_pure::AttrValue;
     let root = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("mpi-init");
     std::fs::remove_dir_all(&root).ok();
     std::fs::create_dir_all(&root).unwrap();
@@ -152,26 +152,23 @@ fn initial_conditions_from_files_on_two_ranks() {
         .setup(12, sph_core::HydroConfig::default())
         .unwrap();
     let p = &scene.particles;
-    let mut b = FileBuilder::new();
-    let mut g = b.create_group("Step#0");
-    g.set_attr("time", AttrValue::F64(0.0));
-    g.set_attr(
-        "box",
-        AttrValue::F64Array(vec![-0.5, 0.5, -0.5, 0.5, -0.5, 0.5]),
-    );
-    for (name, v) in [
+    let attrs = [
+        ("time", AttrValue::F64(0.0)),
+        (
+            "box",
+            AttrValue::F64Array(vec![-0.5, 0.5, -0.5, 0.5, -0.5, 0.5]),
+        ),
+    ];
+    let fields: [(&str, &[f64]); 6] = [
         ("x", &p.x),
         ("y", &p.y),
         ("z", &p.z),
         ("h", &p.h),
         ("m", &p.m),
         ("u", &p.u),
-    ] {
-        g.create_dataset(name).with_f64_data(v);
-    }
-    b.add_group(g.finish());
+    ];
     let foreign = root.join("sphexa.h5");
-    std::fs::write(&foreign, b.finish().unwrap()).unwrap();
+    common::write_sphexa_file(&foreign, &attrs, &fields);
     let dir = |n: &str| root.join(n).to_str().expect("UTF-8").to_owned();
     let conserved = |n: &str| std::fs::read_to_string(root.join(n).join("conserved.csv")).unwrap();
     let foreign = foreign.to_str().unwrap();

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{ok, refused, s, scratch, sphexa_command};
+use common::{initial_fields, ok, refused, s, scratch, sphexa_command, write_sphexa_file};
 use sph_io::{FieldData, H5Part, Selection, Snapshot, SnapshotReader};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -351,7 +351,7 @@ fn auto_checkpoints_report_the_young_daly_interval() {
 /// is the one the case makes itself.
 #[test]
 fn an_sphexa_layout_file_is_read_as_initial_conditions() {
-    use hdf5_pure::{AttrValue, FileBuilder};
+    use hdf5_pure::AttrValue;
     let dir = scratch("init");
     let side = 10;
     let scene = sph_apps::cases::lookup("sedov")
@@ -359,31 +359,18 @@ fn an_sphexa_layout_file_is_read_as_initial_conditions() {
         .setup(side, sph_core::HydroConfig::default())
         .unwrap();
     let p = &scene.particles;
-    let mut b = FileBuilder::new();
-    let mut g = b.create_group("Step#0");
-    g.set_attr("time", AttrValue::F64(0.0));
-    g.set_attr("iteration", AttrValue::I64(0));
-    g.set_attr("minDt", AttrValue::F64(1e-6));
-    g.set_attr(
-        "box",
-        AttrValue::F64Array(vec![-0.5, 0.5, -0.5, 0.5, -0.5, 0.5]),
-    );
-    for (name, v) in [
-        ("x", &p.x),
-        ("y", &p.y),
-        ("z", &p.z),
-        ("vx", &p.vx),
-        ("vy", &p.vy),
-        ("vz", &p.vz),
-        ("h", &p.h),
-        ("m", &p.m),
-        ("u", &p.u),
-    ] {
-        g.create_dataset(name).with_f64_data(v);
-    }
-    b.add_group(g.finish());
+    let attrs = [
+        ("time", AttrValue::F64(0.0)),
+        ("iteration", AttrValue::I64(0)),
+        ("minDt", AttrValue::F64(1e-6)),
+        (
+            "box",
+            AttrValue::F64Array(vec![-0.5, 0.5, -0.5, 0.5, -0.5, 0.5]),
+        ),
+    ];
+    let fields = initial_fields(p);
     let file = dir.join("sedov_ic.h5");
-    std::fs::write(&file, b.finish().unwrap()).unwrap();
+    write_sphexa_file(&file, &attrs, &fields);
     let (from_file, own) = (dir.join("from-file"), dir.join("own"));
     ok(&[
         "sedov",
@@ -400,14 +387,9 @@ fn an_sphexa_layout_file_is_read_as_initial_conditions() {
     assert_eq!(conserved(&from_file).lines().count(), 4);
     assert_eq!(conserved(&from_file), conserved(&own));
     // A file without u is refused, naming the field.
-    let mut b = FileBuilder::new();
-    let mut g = b.create_group("Step#0");
-    for name in ["x", "y", "z", "h", "m"] {
-        g.create_dataset(name).with_f64_data(&p.x);
-    }
-    b.add_group(g.finish());
     let bad = dir.join("no_u.h5");
-    std::fs::write(&bad, b.finish().unwrap()).unwrap();
+    let no_u: Vec<(&str, &[f64])> = ["x", "y", "z", "h", "m"].map(|n| (n, &p.x[..])).to_vec();
+    write_sphexa_file(&bad, &[], &no_u);
     let e = refused(&[
         "sedov",
         "--init",

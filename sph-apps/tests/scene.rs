@@ -6,8 +6,8 @@
 
 mod common;
 
-use common::{assert_mentions, ok, refused, s, scratch};
-use hdf5_pure::{AttrValue, FileBuilder};
+use common::{assert_mentions, initial_fields, ok, refused, s, scratch, write_sphexa_file};
+use hdf5_pure::AttrValue;
 use sph_apps::cases::{self, Layout, SchemeOverrides, Share};
 use std::path::{Path, PathBuf};
 
@@ -32,27 +32,9 @@ fn write_case(
         )
         .unwrap();
     let p = &scene.particles;
-    let mut b = FileBuilder::new();
-    let mut g = b.create_group("Step#0");
-    for (k, v) in attrs {
-        g.set_attr(k, v.clone());
-    }
-    for (name, v) in [
-        ("x", &p.x),
-        ("y", &p.y),
-        ("z", &p.z),
-        ("vx", &p.vx),
-        ("vy", &p.vy),
-        ("vz", &p.vz),
-        ("h", &p.h),
-        ("m", &p.m),
-        ("u", &p.u),
-    ] {
-        g.create_dataset(name).with_f64_data(v);
-    }
-    b.add_group(g.finish());
     let file = dir.join(name);
-    std::fs::write(&file, b.finish().unwrap()).unwrap();
+    let fields = initial_fields(p);
+    write_sphexa_file(&file, attrs, &fields);
     file
 }
 

@@ -4,13 +4,30 @@
 
 mod common;
 
-use common::{s, scratch, sphexa};
-use hdf5_pure::{AttrValue, FileBuilder};
+use common::{s, scratch, sphexa, write_sphexa_file};
+use hdf5_pure::AttrValue;
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).to_string()
+}
+
+/// Column `name` of `conserved.csv` in `dir`, every row.
+fn column(dir: &Path, name: &str) -> Vec<f64> {
+    let csv = std::fs::read_to_string(dir.join("conserved.csv")).expect("conserved.csv");
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    let k = header.iter().position(|h| *h == name).expect(name);
+    lines
+        .map(|l| {
+            l.split(',')
+                .nth(k)
+                .expect("a value")
+                .parse()
+                .expect("a number")
+        })
+        .collect()
 }
 
 fn summary(dir: &Path) -> serde_json::Value {
@@ -29,26 +46,23 @@ fn sedov_file(dir: &Path, row: usize, m: f64, u: f64) -> PathBuf {
     let (mut mass, mut energy) = (p.m.clone(), p.u.clone());
     mass[row] = m;
     energy[row] = u;
-    let mut b = FileBuilder::new();
-    let mut g = b.create_group("Step#0");
-    g.set_attr("time", AttrValue::F64(0.0));
-    g.set_attr(
-        "box",
-        AttrValue::F64Array(vec![-0.5, 0.5, -0.5, 0.5, -0.5, 0.5]),
-    );
-    for (name, v) in [
+    let file = dir.join(format!("sedov_{row}_{m}_{u}.h5"));
+    let attrs = [
+        ("time", AttrValue::F64(0.0)),
+        (
+            "box",
+            AttrValue::F64Array(vec![-0.5, 0.5, -0.5, 0.5, -0.5, 0.5]),
+        ),
+    ];
+    let fields: [(&str, &[f64]); 6] = [
         ("x", &p.x),
         ("y", &p.y),
         ("z", &p.z),
         ("h", &p.h),
         ("m", &mass),
         ("u", &energy),
-    ] {
-        g.create_dataset(name).with_f64_data(v);
-    }
-    b.add_group(g.finish());
-    let file = dir.join(format!("sedov_{row}_{m}_{u}.h5"));
-    std::fs::write(&file, b.finish().unwrap()).unwrap();
+    ];
+    write_sphexa_file(&file, &attrs, &fields);
     file
 }
 
@@ -247,16 +261,8 @@ fn a_driven_run_is_checked_against_its_work() {
         s(&out),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let csv = std::fs::read_to_string(out.join("conserved.csv")).unwrap();
-    let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
-    let (e_col, w_col) = (col("E_tot"), col("W_ext"));
-    let rows: Vec<Vec<f64>> = lines
-        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-        .collect();
-    let (first, last) = (&rows[0], rows.last().unwrap());
-    let (e0, e, w) = (first[e_col], last[e_col], last[w_col]);
+    let (e_tot, w_ext) = (column(&out, "E_tot"), column(&out, "W_ext"));
+    let (e0, e, w) = (e_tot[0], e_tot[e_tot.len() - 1], w_ext[w_ext.len() - 1]);
     assert!(w > 0.0, "no work done: {w}");
     assert!(
         (e - e0).abs() / e0.abs() > 1.0,
@@ -297,13 +303,7 @@ fn an_isothermal_gas_at_rest_is_checked_against_its_thermal_energy() {
         s(&out),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let csv = std::fs::read_to_string(out.join("conserved.csv")).unwrap();
-    let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let e_col = header.iter().position(|h| *h == "E_tot").unwrap();
-    let e: Vec<f64> = lines
-        .map(|l| l.split(',').nth(e_col).unwrap().parse().unwrap())
-        .collect();
+    let e = column(&out, "E_tot");
     let (e0, e1) = (e[0], e[e.len() - 1]);
     // Measured 1.5e-2: |E_0| is no scale here.
     assert!(

@@ -82,3 +82,39 @@ pub fn assert_mentions(stderr: &str, words: &[&str]) {
         assert!(stderr.contains(w), "stderr lacks {w:?}:\n{stderr}");
     }
 }
+
+/// Writes an H5Part file in SPH-EXA's layout, as another code would: one
+/// group `Step#0` with the step attributes `attrs` and one 1-D `f64`
+/// dataset per field (no ids, no checksums, no field table).
+pub fn write_sphexa_file(
+    path: &Path,
+    attrs: &[(&str, hdf5_pure::AttrValue)],
+    fields: &[(&str, &[f64])],
+) {
+    let mut b = hdf5_pure::FileBuilder::new();
+    let mut g = b.create_group("Step#0");
+    for (k, v) in attrs {
+        g.set_attr(k, v.clone());
+    }
+    for (name, v) in fields {
+        g.create_dataset(name).with_f64_data(v);
+    }
+    b.add_group(g.finish());
+    std::fs::write(path, b.finish().expect("an HDF5 image")).expect("the file is written");
+}
+
+/// The fields of an initial state by SPH-EXA's names: positions,
+/// velocities, smoothing lengths, masses, internal energies.
+pub fn initial_fields(p: &sph_core::Particles) -> [(&'static str, &[f64]); 9] {
+    [
+        ("x", &p.x),
+        ("y", &p.y),
+        ("z", &p.z),
+        ("vx", &p.vx),
+        ("vy", &p.vy),
+        ("vz", &p.vz),
+        ("h", &p.h),
+        ("m", &p.m),
+        ("u", &p.u),
+    ]
+}
