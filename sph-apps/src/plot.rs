@@ -453,6 +453,19 @@ fn render_bench(path: &Path, title: &str, panels: &[BenchPanel]) -> Result<(), B
         .first()
         .map_or(0, |p| p.runs.len() + p.reference.len());
     let legend_share = ((entries as f64 * 21.0 + 16.0) / 540.0).min(0.5);
+    // Each point's label: the side N^(1/3) of its particle count.
+    let side_labels = |pts: &[(u64, f64, f64)], colour: RGBColor| {
+        pts.iter()
+            .map(move |p| {
+                EmptyElement::at((p.1, p.2))
+                    + Text::new(
+                        format!("{}³", (p.0 as f64).cbrt().round()),
+                        (7, -18),
+                        (FAMILY, 14).into_font().color(&colour),
+                    )
+            })
+            .collect::<Vec<_>>()
+    };
     for (panel, area) in panels.iter().zip(body.split_evenly((1, n))) {
         let (y_lo, y_hi) = log_range(points(panel).into_iter().map(|p| p.2));
         let y_hi = y_hi * (y_hi / y_lo).powf(legend_share / (1.0 - legend_share));
@@ -500,14 +513,7 @@ fn render_bench(path: &Path, title: &str, panels: &[BenchPanel]) -> Result<(), B
                 pts.iter()
                     .map(|p| Circle::new((p.1, p.2), 4, colour.filled())),
             )?;
-            chart.draw_series(pts.iter().map(|p| {
-                EmptyElement::at((p.1, p.2))
-                    + Text::new(
-                        format!("{}³", (p.0 as f64).cbrt().round()),
-                        (7, -18),
-                        (FAMILY, 14).into_font().color(&colour),
-                    )
-            }))?;
+            chart.draw_series(side_labels(pts, colour))?;
         }
         for (k, (legend, pts)) in panel.reference.iter().enumerate() {
             if pts.is_empty() {
@@ -527,14 +533,7 @@ fn render_bench(path: &Path, title: &str, panels: &[BenchPanel]) -> Result<(), B
                 EmptyElement::at((x, y))
                     + Rectangle::new([(-5, -5), (5, 5)], colour.stroke_width(2))
             }))?;
-            chart.draw_series(pts.iter().map(|p| {
-                EmptyElement::at((p.1, p.2))
-                    + Text::new(
-                        format!("{}³", (p.0 as f64).cbrt().round()),
-                        (7, -18),
-                        (FAMILY, 14).into_font().color(&colour),
-                    )
-            }))?;
+            chart.draw_series(side_labels(pts, colour))?;
         }
         if any {
             chart
