@@ -45,6 +45,15 @@ pub enum Kind {
         /// The value of an arriving particle.
         fill: f64,
     },
+    /// Under block time steps, a derived field that inactive particles
+    /// keep until their own step recomputes it, because active neighbours
+    /// read it: it travels and is checkpointed as [`Kind::Persistent`]
+    /// state. A field is `Held` only where its run holds
+    /// [`FieldSet::block`] ([`kind`] resolves it).
+    Held {
+        /// The value of a new particle.
+        fill: f64,
+    },
 }
 
 /// The condition under which a run holds a field.
@@ -63,6 +72,8 @@ pub enum Needs {
     /// An equation of state with a per-particle reference state
     /// ([`Eos::TaitReferenced`](crate::Eos)).
     ReferencedEos,
+    /// Block (individual) time steps: the particle's time bin.
+    BlockSteps,
 }
 
 /// Which optional fields a run holds (one flag per [`Needs`] condition
@@ -81,6 +92,9 @@ pub struct FieldSet {
     pub alpha: bool,
     /// The reference density and pressure of a referenced EOS.
     pub eos_ref: bool,
+    /// Block time steps: the time bin, and the derived fields inactive
+    /// particles hold ([`Kind::Held`]).
+    pub block: bool,
 }
 
 impl FieldSet {
@@ -91,6 +105,7 @@ impl FieldSet {
         gravity: false,
         alpha: false,
         eos_ref: false,
+        block: false,
     };
 }
 
@@ -103,6 +118,7 @@ impl Default for FieldSet {
             gravity: false,
             alpha: false,
             eos_ref: false,
+            block: false,
         }
     }
 }
@@ -117,6 +133,7 @@ impl FieldSet {
             Needs::Gravity => self.gravity,
             Needs::Switches => self.alpha,
             Needs::ReferencedEos => self.eos_ref,
+            Needs::BlockSteps => self.block,
         }
     }
 
@@ -128,6 +145,7 @@ impl FieldSet {
             gravity: self.gravity || other.gravity,
             alpha: self.alpha || other.alpha,
             eos_ref: self.eos_ref || other.eos_ref,
+            block: self.block || other.block,
         }
     }
 }
@@ -165,6 +183,9 @@ pub struct Field {
     pub column: Column,
     /// One line for listings.
     pub doc: &'static str,
+    /// A derived field that block time steps hold for inactive particles
+    /// ([`Kind::Held`]).
+    pub held_when_block: bool,
 }
 
 impl Field {
@@ -201,11 +222,25 @@ impl Field {
         }
     }
 
-    /// Whether the field is stored in checkpoints (identity, persistent
-    /// state and integrator history: what a restart needs to continue to
+    /// Whether the field is stored in checkpoints of a run with `set`
+    /// (identity, persistent state, integrator history and, under block
+    /// time steps, the held fields: what a restart needs to continue to
     /// the bit).
-    pub fn checkpointed(&self) -> bool {
-        matches!(self.kind, Kind::Identity | Kind::Persistent | Kind::History)
+    pub fn checkpointed(&self, set: FieldSet) -> bool {
+        matches!(
+            kind(self, set),
+            Kind::Identity | Kind::Persistent | Kind::History | Kind::Held { .. }
+        )
+    }
+}
+
+/// What `field` is in a run with `set`: its declared kind, except that a
+/// derived field marked `held_when_block` is [`Kind::Held`] under block
+/// time steps.
+pub fn kind(field: &Field, set: FieldSet) -> Kind {
+    match field.kind {
+        Kind::Derived { fill } if set.block && field.held_when_block => Kind::Held { fill },
+        k => k,
     }
 }
 
@@ -218,6 +253,7 @@ macro_rules! field {
             needs: $needs,
             column: Column::$ty(|p| &p.$($path)+, |p| &mut p.$($path)+),
             doc: "",
+            held_when_block: false,
         }
     };
 }
@@ -227,8 +263,15 @@ const fn doc(mut f: Field, doc: &'static str) -> Field {
     f
 }
 
+/// Marks a derived field that inactive particles hold under block time
+/// steps (their active neighbours read it).
+const fn kept_by_blocks(mut f: Field) -> Field {
+    f.held_when_block = true;
+    f
+}
+
 use Kind::{History, Identity, Persistent};
-use Needs::{Always, GradH, Gravity, Iad, ReferencedEos, Switches};
+use Needs::{Always, BlockSteps, GradH, Gravity, Iad, ReferencedEos, Switches};
 
 const DERIVED: Kind = Kind::Derived { fill: 0.0 };
 
@@ -295,6 +338,9 @@ pub struct Particles {
     pub eos_ref: [Vec<f64>; 2],
     /// Neighbour count of the last search (self included), for the h update.
     pub nc: Vec<u32>,
+    /// Time bin of the particle's current step under block time steps
+    /// (an exact small integer; empty in global runs).
+    pub bin: Vec<f64>,
     /// The optional fields held (on every rank alike, even one that holds
     /// no particles right now, so that messages agree).
     pub(crate) fields: FieldSet,
@@ -322,22 +368,23 @@ pub const FIELDS: &[Field] = &[
     doc(field!("alpha", Some(("ViscosityParameters", 0)), Persistent, Switches, F64, alpha), "artificial-viscosity strength"),
     doc(field!("rho0", None, Persistent, ReferencedEos, F64, eos_ref[0]), "reference density of the referenced EOS (0: from the first density)"),
     doc(field!("p0", None, Persistent, ReferencedEos, F64, eos_ref[1]), "reference pressure of the referenced EOS"),
-    doc(field!("rho", Some(("Densities", 0)), DERIVED, Always, F64, rho), "density"),
-    doc(field!("p", Some(("Pressures", 0)), DERIVED, Always, F64, p), "pressure"),
-    doc(field!("c", Some(("SoundSpeeds", 0)), DERIVED, Always, F64, c), "sound speed"),
-    doc(field!("ax", Some(("Accelerations", 0)), DERIVED, Always, F64, ax), "acceleration"),
-    doc(field!("ay", Some(("Accelerations", 1)), DERIVED, Always, F64, ay), "acceleration"),
-    doc(field!("az", Some(("Accelerations", 2)), DERIVED, Always, F64, az), "acceleration"),
-    doc(field!("du", None, DERIVED, Always, F64, du), "du/dt of this step"),
+    doc(field!("bin", None, Persistent, BlockSteps, F64, bin), "time bin of the particle's step (block time steps)"),
+    kept_by_blocks(doc(field!("rho", Some(("Densities", 0)), DERIVED, Always, F64, rho), "density")),
+    kept_by_blocks(doc(field!("p", Some(("Pressures", 0)), DERIVED, Always, F64, p), "pressure")),
+    kept_by_blocks(doc(field!("c", Some(("SoundSpeeds", 0)), DERIVED, Always, F64, c), "sound speed")),
+    kept_by_blocks(doc(field!("ax", Some(("Accelerations", 0)), DERIVED, Always, F64, ax), "acceleration")),
+    kept_by_blocks(doc(field!("ay", Some(("Accelerations", 1)), DERIVED, Always, F64, ay), "acceleration")),
+    kept_by_blocks(doc(field!("az", Some(("Accelerations", 2)), DERIVED, Always, F64, az), "acceleration")),
+    kept_by_blocks(doc(field!("du", None, DERIVED, Always, F64, du), "du/dt of this step")),
     doc(field!("nc", None, DERIVED, Always, U32, nc), "neighbour count of the last search (self included)"),
-    doc(field!("omega", None, Kind::Derived { fill: 1.0 }, GradH, F64, omega), "grad-h factor"),
-    doc(field!("phi", Some(("Potentials", 0)), DERIVED, Gravity, F64, phi), "gravitational potential per unit mass"),
-    doc(field!("c11", None, DERIVED, Iad, F64, iad[0]), "inverse IAD matrix, xx"),
-    doc(field!("c12", None, DERIVED, Iad, F64, iad[1]), "inverse IAD matrix, xy"),
-    doc(field!("c13", None, DERIVED, Iad, F64, iad[2]), "inverse IAD matrix, xz"),
-    doc(field!("c22", None, DERIVED, Iad, F64, iad[3]), "inverse IAD matrix, yy"),
-    doc(field!("c23", None, DERIVED, Iad, F64, iad[4]), "inverse IAD matrix, yz"),
-    doc(field!("c33", None, DERIVED, Iad, F64, iad[5]), "inverse IAD matrix, zz"),
+    kept_by_blocks(doc(field!("omega", None, Kind::Derived { fill: 1.0 }, GradH, F64, omega), "grad-h factor")),
+    kept_by_blocks(doc(field!("phi", Some(("Potentials", 0)), DERIVED, Gravity, F64, phi), "gravitational potential per unit mass")),
+    kept_by_blocks(doc(field!("c11", None, DERIVED, Iad, F64, iad[0]), "inverse IAD matrix, xx")),
+    kept_by_blocks(doc(field!("c12", None, DERIVED, Iad, F64, iad[1]), "inverse IAD matrix, xy")),
+    kept_by_blocks(doc(field!("c13", None, DERIVED, Iad, F64, iad[2]), "inverse IAD matrix, xz")),
+    kept_by_blocks(doc(field!("c22", None, DERIVED, Iad, F64, iad[3]), "inverse IAD matrix, yy")),
+    kept_by_blocks(doc(field!("c23", None, DERIVED, Iad, F64, iad[4]), "inverse IAD matrix, yz")),
+    kept_by_blocks(doc(field!("c33", None, DERIVED, Iad, F64, iad[5]), "inverse IAD matrix, zz")),
 ];
 
 /// The field called `name`.
@@ -352,7 +399,7 @@ pub fn held(set: FieldSet) -> impl Iterator<Item = &'static Field> {
 
 /// The fields a checkpoint of a run with `set` stores.
 pub fn checkpointed(set: FieldSet) -> impl Iterator<Item = &'static Field> {
-    held(set).filter(|f| f.checkpointed())
+    held(set).filter(move |f| f.checkpointed(set))
 }
 
 /// The held `f64` fields a migrating particle carries (`history: true`)
@@ -361,7 +408,11 @@ pub fn checkpointed(set: FieldSet) -> impl Iterator<Item = &'static Field> {
 pub(crate) fn sent(set: FieldSet, history: bool) -> impl Iterator<Item = &'static Field> {
     held(set).filter(move |f| {
         matches!(f.column, Column::F64(..))
-            && (f.kind == Persistent || (history && f.kind == History))
+            && match kind(f, set) {
+                Persistent | Kind::Held { .. } => true,
+                History => history,
+                _ => false,
+            }
     })
 }
 
@@ -369,8 +420,8 @@ pub(crate) fn sent(set: FieldSet, history: bool) -> impl Iterator<Item = &'stati
 /// for the sent ones (taken from the message; a halo's history is 0),
 /// `Some(fill)` for the derived ones.
 pub(crate) fn f64_fields(set: FieldSet) -> impl Iterator<Item = (GetMut<f64>, Kind)> {
-    held(set).filter_map(|f| match f.column {
-        Column::F64(_, get) => Some((get, f.kind)),
+    held(set).filter_map(move |f| match f.column {
+        Column::F64(_, get) => Some((get, kind(f, set))),
         _ => None,
     })
 }
@@ -389,6 +440,7 @@ mod tests {
                 gravity: true,
                 alpha: true,
                 eos_ref: true,
+                block: true,
             },
         );
         for (k, f) in FIELDS.iter().enumerate() {
@@ -424,13 +476,7 @@ mod tests {
 
     #[test]
     fn a_set_holds_exactly_its_conditions() {
-        let none = FieldSet {
-            iad: false,
-            grad_h: false,
-            gravity: false,
-            alpha: false,
-            eos_ref: false,
-        };
+        let none = FieldSet::NONE;
         assert!(held(none).all(|f| f.needs == Needs::Always));
         let names: Vec<_> = held(FieldSet {
             alpha: true,
@@ -440,9 +486,74 @@ mod tests {
         .map(|f| f.name)
         .collect();
         assert_eq!(names, ["alpha"]);
+        let block: Vec<_> = held(FieldSet {
+            block: true,
+            ..none
+        })
+        .filter(|f| f.needs != Needs::Always)
+        .map(|f| f.name)
+        .collect();
+        assert_eq!(block, ["bin"]);
         // A halo carries 4 words fewer than a migrating particle.
-        for set in [none, FieldSet::default()] {
+        let block = FieldSet {
+            block: true,
+            ..FieldSet::default()
+        };
+        for set in [none, FieldSet::default(), block] {
             assert_eq!(sent(set, true).count() - sent(set, false).count(), 4);
         }
+    }
+
+    fn names(fields: impl Iterator<Item = &'static Field>) -> Vec<&'static str> {
+        fields.map(|f| f.name).collect()
+    }
+
+    /// Global runs send and checkpoint what they did before block time
+    /// steps existed; block runs add the time bin and hold the derived
+    /// fields active neighbours read.
+    #[test]
+    fn block_steps_hold_the_derived_fields_global_runs_recompute() {
+        let global = FieldSet::default();
+        let carried = ["x", "y", "z", "vx", "vy", "vz", "h", "m", "u"];
+        let history = ["dx", "dy", "dz", "du_prev"];
+        assert_eq!(names(sent(global, false)), carried);
+        assert_eq!(
+            names(sent(global, true)),
+            [&carried[..], &history[..]].concat()
+        );
+        assert_eq!(
+            names(checkpointed(global)),
+            [&["id"][..], &carried[..], &history[..]].concat()
+        );
+        assert!(held(global).all(|f| kind(f, global) == f.kind));
+
+        let block = FieldSet {
+            block: true,
+            ..global
+        };
+        let kept = [
+            "rho", "p", "c", "ax", "ay", "az", "du", "omega", "c11", "c12", "c13", "c22", "c23",
+            "c33",
+        ];
+        let halo = names(sent(block, false));
+        assert_eq!(halo, [&carried[..], &["bin"], &kept[..]].concat());
+        for f in held(block) {
+            let k = kind(f, block);
+            assert_eq!(
+                matches!(k, Kind::Held { .. }),
+                kept.contains(&f.name),
+                "{}",
+                f.name
+            );
+            assert_eq!(f.checkpointed(block), f.name != "nc", "{}", f.name);
+        }
+        // Omega keeps its fill for a new particle.
+        let omega = find("omega").unwrap();
+        assert_eq!(kind(omega, block), Kind::Held { fill: 1.0 });
+        // 15 words more per halo (bin and 14 held), 8 bytes more per
+        // particle (bin).
+        assert_eq!(sent(block, false).count(), sent(global, false).count() + 15);
+        let bytes = |set| held(set).map(|f| f.bytes()).sum::<usize>();
+        assert_eq!(bytes(block), bytes(global) + 8);
     }
 }

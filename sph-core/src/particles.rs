@@ -76,7 +76,9 @@ impl Particles {
         let mut w = words[1..].iter().map(|&b| f64::from_bits(b));
         for (get, kind) in fields::f64_fields(self.fields) {
             let v = match kind {
-                Kind::Persistent => w.next().expect("packed particle too short"),
+                Kind::Persistent | Kind::Held { .. } => {
+                    w.next().expect("packed particle too short")
+                }
                 Kind::History if !halo => w.next().expect("packed particle too short"),
                 kind => arrival(kind),
             };
@@ -209,7 +211,7 @@ impl Particles {
 /// sent fields are overwritten from the message).
 fn arrival(kind: Kind) -> f64 {
     match kind {
-        Kind::Derived { fill } => fill,
+        Kind::Derived { fill } | Kind::Held { fill } => fill,
         _ => 0.0,
     }
 }
@@ -305,7 +307,7 @@ impl ParticleFields for Particles {
         let mut word = 1;
         for (get, kind) in fields::f64_fields(self.fields) {
             let f = get(self);
-            if kind == Kind::Persistent {
+            if matches!(kind, Kind::Persistent | Kind::Held { .. }) {
                 f.extend(rows().map(|r| f64::from_bits(r[word])));
                 word += 1;
             } else {

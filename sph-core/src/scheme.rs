@@ -409,6 +409,7 @@ impl Scheme {
             gravity,
             alpha: self.switches().is_some(),
             eos_ref: false,
+            block: false,
         }
     }
 }

@@ -176,3 +176,63 @@ proptest! {
         prop_assert!(a.check(FieldSet::default()).is_ok());
     }
 }
+
+proptest! {
+    /// Under block time steps a particle and a halo carry the time bin and
+    /// the derived fields inactive particles hold (density, pressure,
+    /// sound speed, acceleration, du/dt, Omega, the IAD matrix), a halo
+    /// still without the integrator's history; the domain's reorder keeps
+    /// them with their particle instead of resetting them.
+    #[test]
+    fn block_steps_carry_the_held_fields(seed in any::<u64>(), n in 2usize..20) {
+        let mut fields = FieldSet::default();
+        fields.block = true;
+        let mut p = Particles::new(n, fields);
+        let v = |i: usize, k: usize| (seed.wrapping_mul((i * 31 + k + 1) as u64) % 1000) as f64 + 0.5;
+        for i in 0..n {
+            p.id[i] = 100 + i as u64;
+            for (k, f) in [&mut p.x, &mut p.u, &mut p.dx, &mut p.du_prev, &mut p.bin, &mut p.rho, &mut p.p,
+                           &mut p.c, &mut p.ax, &mut p.az, &mut p.du, &mut p.omega]
+                .into_iter()
+                .enumerate()
+            {
+                f[i] = v(i, k);
+            }
+            p.iad[0][i] = v(i, 20);
+            p.iad[5][i] = v(i, 21);
+        }
+        let (mut full, mut halo) = (Vec::new(), Vec::new());
+        p.pack(0, &mut full);
+        p.pack_halo(0, &mut halo);
+        prop_assert_eq!(p.packed_words() - p.halo_words(), 4);
+        let mut q = p.clone();
+        q.push_packed(&full);
+        q.push_halo(&halo);
+        prop_assert!(q.check(fields).is_ok());
+        for f in [&q.x, &q.u, &q.bin, &q.rho, &q.p, &q.c, &q.ax, &q.az, &q.du, &q.omega, &q.iad[0], &q.iad[5]] {
+            prop_assert_eq!(f[n], f[0]);
+            prop_assert_eq!(f[n + 1], f[0]);
+        }
+        for f in [&q.dx, &q.du_prev] {
+            prop_assert_eq!(f[n], f[0]);
+            prop_assert_eq!(f[n + 1], 0.0);
+        }
+        // The domain's reorder: held fields move with their particle.
+        let perm: Vec<u32> = (0..n as u32).rev().collect();
+        let mut r = p.clone();
+        r.reorder_carried(&perm, &mut Vec::new());
+        for i in 0..n {
+            let j = n - 1 - i;
+            prop_assert_eq!(r.id[i], p.id[j]);
+            prop_assert_eq!(r.rho[i], p.rho[j]);
+            prop_assert_eq!(r.bin[i], p.bin[j]);
+            prop_assert_eq!(r.iad[5][i], p.iad[5][j]);
+        }
+        // Without block steps the same reorder resets them.
+        let mut g = Particles::new(n, FieldSet::default());
+        g.rho.copy_from_slice(&p.rho);
+        g.reorder_carried(&perm, &mut Vec::new());
+        prop_assert!(g.rho.iter().all(|&x| x == 0.0));
+        prop_assert!(g.bin.is_empty());
+    }
+}
