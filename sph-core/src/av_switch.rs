@@ -326,7 +326,7 @@ impl<K: Kernel, const IAD: bool> PairStage for VelocityGradient<'_, K, IAD> {
     }
 
     #[inline(always)]
-    fn finish(&self, g: &Group, sums: GradientSums, out: Self::Out<'_>) {
+    fn finish(&self, g: &Group, sums: GradientSums, out: &mut Self::Out<'_>) {
         let c = if IAD {
             self.0.iad.map(|c| g.load(c))
         } else {
@@ -359,7 +359,7 @@ impl<K: Kernel, const IAD: bool> VelocityGradient<'_, K, IAD> {
         &self,
         c: [F64s; 6],
         (_, inv_h, m): GradientSums,
-        ([dv], (cv, sym)): <Self as PairStage>::Out<'_>,
+        ([dv], (cv, sym)): &mut <Self as PairStage>::Out<'_>,
     ) {
         let f = &self.0;
         let k3 = f.norm * inv_h * inv_h * inv_h;
@@ -551,7 +551,7 @@ impl<K: Kernel> PairStage for IadGradient<'_, K> {
         &self,
         g: &Group,
         (tau, grad): Self::Sums,
-        (c_out, grad_out): Self::Out<'_>,
+        (c_out, grad_out): &mut Self::Out<'_>,
     ) -> FirstSingular {
         let (c, first_bad) = self.tau.invert(g, tau);
         store_matrices(g, &c, c_out);
@@ -690,7 +690,7 @@ impl<K: Kernel, const IAD: bool> PairStage for IndicatorStage<'_, K, IAD> {
     }
 
     #[inline(always)]
-    fn finish(&self, g: &Group, t: IndicatorSums, (shown, advanced): Self::Out<'_>) {
+    fn finish(&self, g: &Group, t: IndicatorSums, (shown, advanced): &mut Self::Out<'_>) {
         let (alpha_loc, v_sig) = self.indicator.finish(g, t);
         if let Some([al, vs]) = shown {
             al.copy_from_slice(&alpha_loc[..g.valid]);

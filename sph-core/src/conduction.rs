@@ -186,7 +186,7 @@ impl<K: Kernel> PairStage for Conduction<'_, K> {
     }
 
     #[inline(always)]
-    fn finish(&self, _: &Group, (_, _, sum): Self::Sums, [du]: Self::Out<'_>) {
+    fn finish(&self, _: &Group, (_, _, sum): Self::Sums, [du]: &mut Self::Out<'_>) {
         let add = (self.c.alpha_u * sum).to_array();
         for (d, a) in du.iter_mut().zip(add) {
             *d += a;

@@ -87,7 +87,7 @@ impl<K: Kernel, const GRAD_H: bool> PairStage for Density<'_, K, GRAD_H> {
     }
 
     #[inline(always)]
-    fn finish(&self, _: &Group, (inv_h, sum_w, sum_dh): Self::Sums, out: Self::Out<'_>) {
+    fn finish(&self, _: &Group, (inv_h, sum_w, sum_dh): Self::Sums, out: &mut Self::Out<'_>) {
         let h3 = inv_h * inv_h * inv_h;
         let rho_g = self.norm * h3 * sum_w;
         let ([rho], omega) = out;
@@ -302,7 +302,7 @@ impl<K: Kernel, const GRAD_H: bool> PairStage for VeDensity<'_, K, GRAD_H> {
     }
 
     #[inline(always)]
-    fn finish(&self, g: &Group, (inv_h, sk, sx, sm): Self::Sums, out: Self::Out<'_>) {
+    fn finish(&self, g: &Group, (inv_h, sk, sx, sm): Self::Sums, out: &mut Self::Out<'_>) {
         let h3 = self.norm * inv_h * inv_h * inv_h;
         let (xi, mi) = (g.load(self.xm), g.load(self.m));
         let kx = h3 * sk;

@@ -100,7 +100,7 @@ pub fn iad_volumes<K: Kernel>(
 
 /// Writes the group's matrices into the six component slices.
 #[inline(always)]
-pub(crate) fn store_matrices(g: &Group, c: &[[f64; 6]; LANES], mut out: [&mut [f64]; 6]) {
+pub(crate) fn store_matrices(g: &Group, c: &[[f64; 6]; LANES], out: &mut [&mut [f64]; 6]) {
     for (l, cl) in c.iter().enumerate().take(g.valid) {
         for (o, &v) in out.iter_mut().zip(cl) {
             o[l] = v;
@@ -196,7 +196,7 @@ impl<K: Kernel> PairStage for Tau<'_, K> {
     }
 
     #[inline(always)]
-    fn finish(&self, g: &Group, sums: Self::Sums, out: Self::Out<'_>) -> FirstSingular {
+    fn finish(&self, g: &Group, sums: Self::Sums, out: &mut Self::Out<'_>) -> FirstSingular {
         let (c, first_bad) = self.invert(g, sums);
         store_matrices(g, &c, out);
         first_bad

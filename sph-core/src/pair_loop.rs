@@ -20,6 +20,12 @@
 //! results do not depend on the grouping, the number of threads or the
 //! number of ranks, while the arithmetic runs as vector instructions.
 //!
+//! [`PairLoop::run_masked`] runs the same loop for a subset of the targets
+//! (block time steps): groups without an active target are skipped, and
+//! in the others the inactive targets' outputs are put back after the
+//! stage's `finish`, so the active targets get `run`'s bits and no stage
+//! needs to know about the mask.
+//!
 //! # Example: a stage of your own
 //! The number of neighbours within `h` of each particle:
 //!
@@ -44,7 +50,7 @@
 //!     fn pair(&self, s: &mut Self::Sums, _j: usize, _d: [F64s; 3], r2: F64s) {
 //!         s.1 += r2.lt(s.0).select(F64s::splat(1.0), F64s::splat(0.0));
 //!     }
-//!     fn finish(&self, _g: &Group, s: Self::Sums, [out]: Self::Out<'_>) {
+//!     fn finish(&self, _g: &Group, s: Self::Sums, [out]: &mut Self::Out<'_>) {
 //!         s.1.store(out);
 //!     }
 //! }
@@ -99,7 +105,13 @@ pub struct Group {
     pub first: usize,
     /// Targets in the group (1 to [`LANES`]).
     pub valid: usize,
+    /// Bit `l` set: the target of lane `l` is active, its outputs are kept
+    /// ([`PairLoop::run_masked`]); every valid lane in [`PairLoop::run`].
+    pub active: u32,
 }
+
+// The lane mask has a bit per lane.
+const _: () = assert!(LANES <= 32);
 
 impl Group {
     /// `values[first + l]` in lane `l` (padding lanes repeat the last).
@@ -112,6 +124,16 @@ impl Group {
     pub fn targets(&self) -> Range<usize> {
         self.first..self.first + self.valid
     }
+
+    /// The mask with every valid lane active.
+    pub fn all_lanes(valid: usize) -> u32 {
+        (1u32 << valid) - 1
+    }
+
+    /// Whether every valid lane is active.
+    pub fn all_active(&self) -> bool {
+        self.active == Self::all_lanes(self.valid)
+    }
 }
 
 /// One pair interaction on the shared driver: what a group of targets
@@ -121,7 +143,11 @@ impl Group {
 /// [`pair`](Self::pair) for every partner `j` of the union of the group's
 /// neighbour lists in ascending order (the target itself included, at
 /// distance 0), then [`finish`](Self::finish) with the group's chunk of
-/// the outputs; the groups' [`Stats`](Self::Stats) are reduced.
+/// the outputs; the groups' [`Stats`](Self::Stats) are reduced. A stage
+/// computes every lane; in a masked run ([`PairLoop::run_masked`]) the
+/// driver puts the inactive lanes' outputs back afterwards, so no stage
+/// needs to know which lanes count (its `Stats` cover every lane of a
+/// group with an active one).
 pub trait PairStage: Sync {
     /// Per-group state: target values loaded by `start`, and the sums.
     type Sums;
@@ -140,7 +166,7 @@ pub trait PairStage: Sync {
 
     /// Turns the sums into the group's outputs (the first `g.valid`
     /// entries of each output slice) and its figure.
-    fn finish(&self, g: &Group, sums: Self::Sums, out: Self::Out<'_>) -> Self::Stats;
+    fn finish(&self, g: &Group, sums: Self::Sums, out: &mut Self::Out<'_>) -> Self::Stats;
 }
 
 /// A figure reduced over groups in any order: `merge` must be associative
@@ -166,6 +192,17 @@ pub trait LaneOutputs: Send + Sized {
     fn entries(&self) -> Option<usize>;
     /// The first `mid` entries and the rest.
     fn split_at(self, mid: usize) -> (Self, Self);
+    /// Appends the entries of the lanes `l < valid` whose bit in `mask`
+    /// is clear to `keep`, slice by slice.
+    fn save(&self, valid: usize, mask: u32, keep: &mut Vec<f64>);
+    /// Writes back what [`save`](Self::save) took, in its order.
+    fn restore(&mut self, valid: usize, mask: u32, keep: &mut std::slice::Iter<'_, f64>);
+}
+
+/// Whether lane `l` is clear in `mask` (an output to keep).
+#[inline]
+fn kept(mask: u32, l: usize) -> bool {
+    mask & (1 << l) == 0
 }
 
 impl<const N: usize> LaneOutputs for [&mut [f64]; N] {
@@ -182,6 +219,20 @@ impl<const N: usize> LaneOutputs for [&mut [f64]; N] {
             (left[k], right[k]) = s.split_at_mut(mid);
         }
         (left, right)
+    }
+
+    fn save(&self, valid: usize, mask: u32, keep: &mut Vec<f64>) {
+        for s in self {
+            keep.extend((0..valid).filter(|&l| kept(mask, l)).map(|l| s[l]));
+        }
+    }
+
+    fn restore(&mut self, valid: usize, mask: u32, keep: &mut std::slice::Iter<'_, f64>) {
+        for s in self.iter_mut() {
+            for l in (0..valid).filter(|&l| kept(mask, l)) {
+                s[l] = *keep.next().expect("as many values as were saved");
+            }
+        }
     }
 }
 
@@ -200,6 +251,18 @@ impl<A: LaneOutputs> LaneOutputs for Option<A> {
             None => (None, None),
         }
     }
+
+    fn save(&self, valid: usize, mask: u32, keep: &mut Vec<f64>) {
+        if let Some(a) = self {
+            a.save(valid, mask, keep);
+        }
+    }
+
+    fn restore(&mut self, valid: usize, mask: u32, keep: &mut std::slice::Iter<'_, f64>) {
+        if let Some(a) = self {
+            a.restore(valid, mask, keep);
+        }
+    }
 }
 
 impl<A: LaneOutputs, B: LaneOutputs> LaneOutputs for (A, B) {
@@ -215,6 +278,16 @@ impl<A: LaneOutputs, B: LaneOutputs> LaneOutputs for (A, B) {
         let (a0, a1) = self.0.split_at(mid);
         let (b0, b1) = self.1.split_at(mid);
         ((a0, b0), (a1, b1))
+    }
+
+    fn save(&self, valid: usize, mask: u32, keep: &mut Vec<f64>) {
+        self.0.save(valid, mask, keep);
+        self.1.save(valid, mask, keep);
+    }
+
+    fn restore(&mut self, valid: usize, mask: u32, keep: &mut std::slice::Iter<'_, f64>) {
+        self.0.restore(valid, mask, keep);
+        self.1.restore(valid, mask, keep);
     }
 }
 
@@ -295,6 +368,39 @@ impl<'a> PairLoop<'a> {
     /// neighbour index is beyond the particles (a list built for other
     /// arrays).
     pub fn run<S: PairStage>(&self, stage: &S, out: S::Out<'_>) -> S::Stats {
+        self.run_where(stage, out, None)
+    }
+
+    /// As [`run`](Self::run) for the targets `t` with `active[t -
+    /// targets.start]` (one flag per target): groups without an active
+    /// target are skipped, and in the others the inactive targets'
+    /// outputs are left as they were. The active targets' outputs are
+    /// those of `run`, bit for bit. `Stats` cover every lane of the
+    /// groups that ran.
+    ///
+    /// # Panics
+    /// As [`run`](Self::run), and if `active` does not have one flag per
+    /// target.
+    pub fn run_masked<S: PairStage>(
+        &self,
+        stage: &S,
+        out: S::Out<'_>,
+        active: &[bool],
+    ) -> S::Stats {
+        assert_eq!(
+            active.len(),
+            self.nl.targets().len(),
+            "pair loop: active flags vs targets"
+        );
+        self.run_where(stage, out, Some(active))
+    }
+
+    fn run_where<S: PairStage>(
+        &self,
+        stage: &S,
+        out: S::Out<'_>,
+        active: Option<&[bool]>,
+    ) -> S::Stats {
         let targets = self.nl.targets();
         if let Some(len) = out.entries() {
             assert_eq!(len, targets.len(), "pair loop: outputs vs targets");
@@ -305,34 +411,50 @@ impl<'a> PairLoop<'a> {
             len: targets.len(),
         };
         rayon::iter::split(chunk, Chunk::halve)
-            .map_init(GroupUnion::default, |union, chunk| {
-                self.run_chunk(stage, union, chunk)
-            })
+            .map_init(
+                || (GroupUnion::default(), Vec::new()),
+                |(union, keep), chunk| self.run_chunk(stage, union, keep, chunk, active),
+            )
             .reduce(S::Stats::identity, S::Stats::merge)
     }
 
-    /// The groups of one chunk, in order.
+    /// The groups of one chunk, in order (`active`: one flag per target
+    /// of the list, or all active).
     fn run_chunk<S: PairStage>(
         &self,
         stage: &S,
         union: &mut GroupUnion,
+        keep: &mut Vec<f64>,
         mut chunk: Chunk<S::Out<'_>>,
+        active: Option<&[bool]>,
     ) -> S::Stats {
         let (x, y, z) = (self.x, self.y, self.z);
         let n = x.len();
+        let start = self.nl.targets().start;
         let mut stats = S::Stats::identity();
         while chunk.len > 0 {
             let valid = chunk.len.min(LANES);
-            let (out, rest) = chunk.out.split_at(valid);
+            let (mut out, rest) = chunk.out.split_at(valid);
+            let mask = match active {
+                None => Group::all_lanes(valid),
+                Some(a) => a[chunk.first - start..][..valid]
+                    .iter()
+                    .enumerate()
+                    .fold(0, |m, (l, &on)| m | (u32::from(on) << l)),
+            };
             let g = Group {
                 first: chunk.first,
                 valid,
+                active: mask,
             };
             chunk = Chunk {
                 out: rest,
                 first: chunk.first + valid,
                 len: chunk.len - valid,
             };
+            if mask == 0 {
+                continue;
+            }
             let xi = [g.load(x), g.load(y), g.load(z)];
             let sep = self.sep.for_group(xi, self.reach);
             let mut sums = stage.start(&g);
@@ -344,7 +466,14 @@ impl<'a> PairLoop<'a> {
                     stage.pair(&mut sums, j, d, r2);
                 }
             }
-            stats = stats.merge(stage.finish(&g, sums, out));
+            if g.all_active() {
+                stats = stats.merge(stage.finish(&g, sums, &mut out));
+            } else {
+                keep.clear();
+                out.save(valid, mask, keep);
+                stats = stats.merge(stage.finish(&g, sums, &mut out));
+                out.restore(valid, mask, &mut keep.iter());
+            }
         }
         stats
     }

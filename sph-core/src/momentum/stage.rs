@@ -231,7 +231,7 @@ where
     }
 
     #[inline(always)]
-    fn finish(&self, g: &Group, (t, acc): Self::Sums, out: Self::Out<'_>) -> MomentumStats {
+    fn finish(&self, g: &Group, (t, acc): Self::Sums, out: &mut Self::Out<'_>) -> MomentumStats {
         let ([ax, ay, az, du], criteria) = out;
         acc.a[0].store(ax);
         acc.a[1].store(ay);
