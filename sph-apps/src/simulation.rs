@@ -356,7 +356,14 @@ impl<C: Communicator> Simulation<C> {
             let all = 0..self.scene.particles.len();
             let eos = self.scene.config.eos;
             let comm = self.hydro.domain().comm();
-            w.check_initial(&self.scene.particles, all, comm, root, &eos)?;
+            w.check_initial(
+                &self.scene.particles,
+                all,
+                comm,
+                root,
+                &eos,
+                &self.scene.bbox,
+            )?;
         }
         let mut tally = Tally::new(n);
         let start = outputs.start;

@@ -239,6 +239,7 @@ impl Watch {
         comm: &C,
         root: bool,
         eos: &sph_core::Eos,
+        bbox: &sph_tree::BoundingBox,
     ) -> Result<(), AppError> {
         let internal_energy = eos.uses_internal_energy();
         self.barotropic = eos.energy(1.0).is_some();
@@ -266,6 +267,29 @@ impl Watch {
             None
         };
         if let Some(b) = first_by_id(p, owned.clone(), comm, bad_value) {
+            return Err(AppError::Input(b));
+        }
+        // A periodic axis holds its particles (to 1e-9 of its length: a
+        // glass or lattice may sit on the upper face).
+        let (lo, hi) = (bbox.lo(), bbox.hi());
+        let outside = |i: usize| -> Option<String> {
+            let x = [p.x[i], p.y[i], p.z[i]];
+            (0..3)
+                .find(|&k| {
+                    let tol = 1e-9 * (hi[k] - lo[k]);
+                    bbox.is_periodic(k) && (x[k] < lo[k] - tol || x[k] > hi[k] + tol)
+                })
+                .map(|k| {
+                    format!(
+                        "{} = {:e} outside the periodic box's [{}, {}) (allowed: inside it; give the box that holds the particles, e.g. --box, or move them in)",
+                        ["x", "y", "z"][k],
+                        x[k],
+                        lo[k],
+                        hi[k]
+                    )
+                })
+        };
+        if let Some(b) = first_by_id(p, owned.clone(), comm, outside) {
             return Err(AppError::Input(b));
         }
         let zero_mass = |i: usize| (p.m[i] <= 0.0).then(|| format!("m = {:e}", p.m[i]));
@@ -605,6 +629,7 @@ mod tests {
                 &SerialComm::new(),
                 false,
                 &sph_core::Eos::IdealGas { gamma: 1.4 },
+                &sph_tree::BoundingBox::cube(-10.0, 10.0, sph_tree::Boundary::Open).unwrap(),
             )
             .unwrap_err()
             .to_string();

@@ -304,4 +304,14 @@ fn unsaid_physics_is_named() {
     assert_mentions(&e, &["'-1'", "on, off"]);
     let e = run(&["--steps", "1"]);
     assert_mentions(&e, &["no case given", "--init FILE"]);
+    // The particles of [-0.5, 0.5) in a periodic box said to be [0, 1).
+    let e = run(&[
+        "--init",
+        s(&periodic_no_box),
+        "--box",
+        "0:1",
+        "--steps",
+        "1",
+    ]);
+    assert_mentions(&e, &["x = -", "outside the periodic box", "--box"]);
 }
