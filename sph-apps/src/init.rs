@@ -34,16 +34,7 @@ pub fn load<C: Communicator>(
     if sph_io::swift::looks_like_swift(&path) {
         return load_swift(comm, &path, k, fields, case_box);
     }
-    let count = foreign::step_count(&path).map_err(|e| {
-        AppError::Usage(format!(
-            "--init {}: neither an H5Part file ({e}) nor a SWIFT/GADGET file (no group 'Header')",
-            path.display()
-        ))
-    })?;
-    let index = match k {
-        Some(k) => k as usize,
-        None => count.saturating_sub(1),
-    };
+    let index = step_index(&path, k)?;
     let required = ["x", "y", "z", "h", "m", "u"];
     let optional = ["vx", "vy", "vz", "id"];
     let head = foreign::read_foreign_rows(&path, index, &required, &[], 0..0)?;
@@ -152,15 +143,20 @@ pub fn attributes(spec: &str) -> Result<crate::cases::scene::FileAttrs, AppError
             ..FileAttrs::default()
         });
     }
-    let count = sph_io::foreign::step_count(&path).map_err(|e| {
+    let index = step_index(&path, k)?;
+    let head = sph_io::foreign::read_foreign_rows(&path, index, &[], &[], 0..0)?;
+    FileAttrs::of(&path.display().to_string(), &head)
+}
+
+/// The step group `k` of H5Part file `path`, or its last.
+fn step_index(path: &std::path::Path, k: Option<u64>) -> Result<usize, AppError> {
+    let count = sph_io::foreign::step_count(path).map_err(|e| {
         AppError::Usage(format!(
             "--init {}: neither an H5Part file ({e}) nor a SWIFT/GADGET file (no group 'Header')",
             path.display()
         ))
     })?;
-    let index = k.map_or(count.saturating_sub(1), |k| k as usize);
-    let head = sph_io::foreign::read_foreign_rows(&path, index, &[], &[], 0..0)?;
-    FileAttrs::of(&path.display().to_string(), &head)
+    Ok(k.map_or(count.saturating_sub(1), |k| k as usize))
 }
 
 /// [`load`] of a SWIFT/GADGET file.

@@ -279,15 +279,10 @@ fn execute(a: RunArgs) -> Result<(), AppError> {
         let (p, total, bbox) = crate::init::load(&comm, spec, scene.config.fields(), &scene.bbox)?;
         scene.particles = p;
         scene.total = total;
-        match (bbox, &user_scene) {
-            // A scene keeps the box and boundaries it resolved, the
-            // options' over the file's.
-            (_, Some(_)) if a.cube.is_some() => {}
-            (Some(b), Some(s)) => {
-                scene.bbox = sph_tree::BoundingBox::new(b.lo(), b.hi(), s.bbox.boundary())?
-            }
-            (Some(b), None) => scene.bbox = b,
-            (None, _) => {}
+        // A scene keeps the box it resolved from the same file's
+        // attributes and the options; a case takes the file's.
+        if let (Some(b), None) = (bbox, &user_scene) {
+            scene.bbox = b;
         }
     }
     let scene_keys = user_scene.as_ref().map(|s| resolved::SceneKeys {
