@@ -41,8 +41,15 @@ pub struct Summary {
     pub case: String,
     /// Particle count.
     pub particles: usize,
-    /// Steps run.
+    /// Steps run (sub-steps of a block-step run).
     pub steps: u64,
+    /// Particle updates over the run: particles times steps in a global
+    /// run, the active particles summed over the sub-steps of a
+    /// block-step run (since this process started or restarted the run).
+    pub particle_updates: u64,
+    /// `particle_updates / particles`: the global steps the run's work
+    /// amounts to.
+    pub full_step_equivalents: f64,
     /// Time reached.
     pub t_end: f64,
     /// Wall-clock seconds of the whole loop.
@@ -150,6 +157,9 @@ pub struct Simulation<C: Communicator = SerialComm> {
     resumed_at: Option<u64>,
     watch: Option<Watch>,
     after_step: Option<fn()>,
+    /// The end of a block-step run's time line when it stops after a
+    /// number of steps (`Stop::Time` ends it at its time).
+    line_end: Option<f64>,
 }
 
 impl Simulation {
@@ -219,6 +229,11 @@ impl<C: Communicator> Simulation<C> {
             )));
         }
         let (t0, dt0) = resume.map_or((0.0, scene.dt0), |s| (s.t, s.dt_prev));
+        if resume.is_some() && scene.config.time_steps == sph_core::TimeSteps::Block {
+            return Err(AppError::Usage(
+                "a block-step run cannot be restarted yet (its checkpoints do not hold the time line); restart with --time-steps global, or run from the start".into(),
+            ));
+        }
         let scene_gravity = scene.config.gravity.is_some();
         let mut hydro =
             Hydro::with_comm(kernel, scene.config, t0, dt0, comm, DomainConfig::default())?;
@@ -234,6 +249,7 @@ impl<C: Communicator> Simulation<C> {
             write_particles: false,
             rank_timings: false,
             after_step: None,
+            line_end: None,
             outputs: Outputs::default(),
             resumed_at: resume.map(|s| s.step),
             watch: Some(Watch::new(watch::Bounds::for_run(scene_gravity), false)),
@@ -336,6 +352,12 @@ impl<C: Communicator> Simulation<C> {
         self.after_step = hook;
     }
 
+    /// Where the time line of a block-step run that stops after a number
+    /// of steps ends (a run to an end time ends its line there).
+    pub fn set_time_line_end(&mut self, t_end: f64) {
+        self.line_end = Some(t_end);
+    }
+
     /// How the run watches its conserved quantities (default: the bounds
     /// of [`watch::Bounds::for_run`], warnings only); `None` turns the
     /// watch off.
@@ -364,6 +386,20 @@ impl<C: Communicator> Simulation<C> {
                 &eos,
                 &self.scene.bbox,
             )?;
+        }
+        if self.scene.config.time_steps == sph_core::TimeSteps::Block
+            && self.hydro.time_line().is_none()
+        {
+            let end = match stop {
+                Stop::Time(te) => Some(te),
+                Stop::Steps(_) => self.line_end,
+            };
+            let end = end.ok_or_else(|| {
+                AppError::Usage(
+                    "block time steps need an end time for their time line: give --end-time with --steps".into(),
+                )
+            })?;
+            self.hydro.set_time_line(end)?;
         }
         let mut tally = Tally::new(n);
         let start = outputs.start;
@@ -532,6 +568,8 @@ impl<C: Communicator> Simulation<C> {
             case: self.scene.case.to_string(),
             particles: n,
             steps: self.hydro.steps(),
+            particle_updates: self.hydro.particle_updates(),
+            full_step_equivalents: self.hydro.particle_updates() as f64 / n.max(1) as f64,
             t_end: end.t,
             wall_s,
             mean_step_s,

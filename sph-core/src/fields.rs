@@ -341,6 +341,10 @@ pub struct Particles {
     /// Time bin of the particle's current step under block time steps
     /// (an exact small integer; empty in global runs).
     pub bin: Vec<f64>,
+    /// `d ln rho / dt` over the particle's last step under block time
+    /// steps, which predicts its density while it is inactive (empty in
+    /// global runs).
+    pub dlnrho: Vec<f64>,
     /// The optional fields held (on every rank alike, even one that holds
     /// no particles right now, so that messages agree).
     pub(crate) fields: FieldSet,
@@ -369,6 +373,7 @@ pub const FIELDS: &[Field] = &[
     doc(field!("rho0", None, Persistent, ReferencedEos, F64, eos_ref[0]), "reference density of the referenced EOS (0: from the first density)"),
     doc(field!("p0", None, Persistent, ReferencedEos, F64, eos_ref[1]), "reference pressure of the referenced EOS"),
     doc(field!("bin", None, Persistent, BlockSteps, F64, bin), "time bin of the particle's step (block time steps)"),
+    doc(field!("dlnrho", None, Persistent, BlockSteps, F64, dlnrho), "d ln rho / dt over the particle's last step (block time steps)"),
     kept_by_blocks(doc(field!("rho", Some(("Densities", 0)), DERIVED, Always, F64, rho), "density")),
     kept_by_blocks(doc(field!("p", Some(("Pressures", 0)), DERIVED, Always, F64, p), "pressure")),
     kept_by_blocks(doc(field!("c", Some(("SoundSpeeds", 0)), DERIVED, Always, F64, c), "sound speed")),
@@ -493,7 +498,7 @@ mod tests {
         .filter(|f| f.needs != Needs::Always)
         .map(|f| f.name)
         .collect();
-        assert_eq!(block, ["bin"]);
+        assert_eq!(block, ["bin", "dlnrho"]);
         // A halo carries 4 words fewer than a migrating particle.
         let block = FieldSet {
             block: true,
@@ -536,7 +541,7 @@ mod tests {
             "c33",
         ];
         let halo = names(sent(block, false));
-        assert_eq!(halo, [&carried[..], &["bin"], &kept[..]].concat());
+        assert_eq!(halo, [&carried[..], &["bin", "dlnrho"], &kept[..]].concat());
         for f in held(block) {
             let k = kind(f, block);
             assert_eq!(
@@ -550,10 +555,10 @@ mod tests {
         // Omega keeps its fill for a new particle.
         let omega = find("omega").unwrap();
         assert_eq!(kind(omega, block), Kind::Held { fill: 1.0 });
-        // 15 words more per halo (bin and 14 held), 8 bytes more per
-        // particle (bin).
-        assert_eq!(sent(block, false).count(), sent(global, false).count() + 15);
+        // 16 words more per halo (bin, dlnrho and 14 held), 16 bytes
+        // more per particle (bin, dlnrho).
+        assert_eq!(sent(block, false).count(), sent(global, false).count() + 16);
         let bytes = |set| held(set).map(|f| f.bytes()).sum::<usize>();
-        assert_eq!(bytes(block), bytes(global) + 8);
+        assert_eq!(bytes(block), bytes(global) + 16);
     }
 }

@@ -87,4 +87,4 @@ pub use neighbors::NeighborParams;
 pub use pair_loop::Gradients;
 pub use particles::{FieldSet, Particles};
 pub use scheme::{AvForm, Scheme, Viscosity, Volume, PRESETS};
-pub use timestep::TimestepParams;
+pub use timestep::{TimeSteps, TimestepParams};

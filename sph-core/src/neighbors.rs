@@ -83,6 +83,51 @@ pub fn find_neighbors(
     nc: &mut [u32],
     step: u64,
 ) -> Result<NeighborStats, CoreError> {
+    find_neighbors_of(
+        params,
+        h_update,
+        tree,
+        bbox,
+        [x, y, z],
+        h,
+        ids,
+        targets,
+        None,
+        h_limit,
+        list,
+        nc,
+        step,
+    )
+}
+
+/// [`find_neighbors`] for the flagged targets only (`active`: one flag per
+/// target, or `None` for all): the lists serve those targets
+/// ([`CompactNeighborList::active_targets`], so the pair loops compute
+/// them only), and only their h iterate and their counts are written. A
+/// flagged target gets the list, h and count a full search gives it.
+#[allow(clippy::too_many_arguments)]
+pub fn find_neighbors_of(
+    params: &NeighborParams,
+    h_update: HUpdate,
+    tree: &Octree,
+    bbox: &BoundingBox,
+    [x, y, z]: [&[f64]; 3],
+    h: &mut [f64],
+    ids: &[u64],
+    targets: Range<usize>,
+    active: Option<&[bool]>,
+    h_limit: f64,
+    list: &mut CompactNeighborList,
+    nc: &mut [u32],
+    step: u64,
+) -> Result<NeighborStats, CoreError> {
+    let groups: Option<Vec<bool>> = active.map(|a| {
+        assert_eq!(a.len(), targets.len(), "one flag per target");
+        a.chunks(sph_tree::GROUP_LANES)
+            .map(|g| g.iter().any(|&on| on))
+            .collect()
+    });
+    let is_target = |i: usize| active.is_none_or(|a| a[i - targets.start]);
     // Symmetric lists: a pair interacts through both W(h_i) and W(h_j), so
     // both partners must list each other for the forces to stay antisymmetric.
     // Grouped lists: the pair loops take LANES consecutive targets per
@@ -95,9 +140,17 @@ pub fn find_neighbors(
     let hu = params.h_update(h_update);
     let mut iterations = 0;
     loop {
-        let stats = search.find_compact(tree, bbox, x, y, z, h, targets.clone(), list)?;
+        let stats = match &groups {
+            None => search.find_compact(tree, bbox, x, y, z, h, targets.clone(), list)?,
+            Some(g) => {
+                let s =
+                    search.find_compact_groups(tree, bbox, x, y, z, h, targets.clone(), g, list)?;
+                list.set_active_targets(active.unwrap_or_default());
+                s
+            }
+        };
         let mut bad = None;
-        for i in targets.clone() {
+        for i in targets.clone().filter(|&i| is_target(i)) {
             let c = list.count(i);
             nc[i] = c as u32;
             if params.out_of_range(c) {
@@ -125,7 +178,7 @@ pub fn find_neighbors(
             .filter(|&k| bbox.is_periodic(k))
             .map(|k| 0.249 * lengths[k])
             .fold(h_limit, f64::min);
-        for i in targets.clone() {
+        for i in targets.clone().filter(|&i| is_target(i)) {
             let c = list.count(i);
             if params.out_of_range(c) {
                 h[i] = (h[i] * hu.factor(c as u32)).min(hmax);

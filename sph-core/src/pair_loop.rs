@@ -361,14 +361,16 @@ impl<'a> PairLoop<'a> {
     }
 
     /// Runs `stage` over every target; `out` holds one entry per target
-    /// (slices over `nl.targets()`).
+    /// (slices over `nl.targets()`). Lists that serve some targets only
+    /// ([`CompactNeighborList::active_targets`]) run as
+    /// [`run_masked`](Self::run_masked) with their flags.
     ///
     /// # Panics
     /// If an output's length differs from the number of targets, or a
     /// neighbour index is beyond the particles (a list built for other
     /// arrays).
     pub fn run<S: PairStage>(&self, stage: &S, out: S::Out<'_>) -> S::Stats {
-        self.run_where(stage, out, None)
+        self.run_where(stage, out, self.nl.active_targets())
     }
 
     /// As [`run`](Self::run) for the targets `t` with `active[t -

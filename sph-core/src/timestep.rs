@@ -28,6 +28,57 @@ pub struct TimestepParams {
     pub k_u: f64,
     /// How the first step relates to the given first time step `dt0`.
     pub first_step: FirstStep,
+    /// Block time steps: the longest step a particle may take, or `None`
+    /// for an eighth of the run's span (the cold gas of a blast costs
+    /// `span / dt_max` updates per particle).
+    pub dt_max: Option<f64>,
+    /// Block time steps: the limiter (Saitoh & Makino 2009). No
+    /// particle's bin is more than `limiter_delta` above its
+    /// neighbours': a new bin is capped by the neighbours' bins, and an
+    /// active particle wakes neighbours whose steps are longer than
+    /// `2^limiter_delta` times its new one.
+    pub limiter: bool,
+    /// Bins a particle may sit above its neighbours (2: a factor 4).
+    pub limiter_delta: u8,
+}
+
+/// How particles share time steps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum TimeSteps {
+    /// One step for all, the smallest any particle needs (the
+    /// Press / Adams-Bashforth integrator of the seed paper and SPH-EXA).
+    #[default]
+    Global,
+    /// Each particle its own power-of-two fraction of a longest step
+    /// (block time steps), with the same integrator's formulas over each
+    /// particle's own step; inactive particles drift.
+    Block,
+}
+
+/// `--time-steps` and the `time-steps` key.
+impl crate::Choice for TimeSteps {
+    const ALL: &'static [Self] = &[TimeSteps::Global, TimeSteps::Block];
+
+    fn name(&self) -> &'static str {
+        match self {
+            TimeSteps::Global => "global",
+            TimeSteps::Block => "block",
+        }
+    }
+
+    fn help(&self) -> &'static str {
+        match self {
+            TimeSteps::Global => {
+                "One time step for every particle, the smallest any needs (the seed paper's \
+                 and SPH-EXA's integrator)"
+            }
+            TimeSteps::Block => {
+                "Each particle its own power-of-two fraction of a longest step, with a limiter \
+                 (block time steps; ideal-gas hydro with constant viscosity only, for now)"
+            }
+        }
+    }
 }
 
 /// The first step of a run: held to `max_growth * dt0`, from which the
@@ -82,6 +133,9 @@ impl Default for TimestepParams {
             eps_acc: 0.005,
             k_u: 0.5,
             first_step: FirstStep::Ramp,
+            dt_max: None,
+            limiter: true,
+            limiter_delta: 2,
         }
     }
 }
@@ -101,17 +155,20 @@ pub enum DtLimit {
     Growth,
     /// A cap from outside (an output or end time).
     Cap,
+    /// Block time steps: the nearest end of a particle's own step.
+    StepEnd,
 }
 
 impl DtLimit {
     /// Every limit, in the order above.
-    pub const ALL: [DtLimit; 6] = [
+    pub const ALL: [DtLimit; 7] = [
         DtLimit::Courant,
         DtLimit::Divergence,
         DtLimit::Acceleration,
         DtLimit::Energy,
         DtLimit::Growth,
         DtLimit::Cap,
+        DtLimit::StepEnd,
     ];
 
     /// Short lower-case name (for tables).
@@ -123,6 +180,7 @@ impl DtLimit {
             DtLimit::Energy => "energy",
             DtLimit::Growth => "growth",
             DtLimit::Cap => "cap",
+            DtLimit::StepEnd => "step-end",
         }
     }
 }

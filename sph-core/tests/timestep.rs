@@ -39,7 +39,7 @@ proptest! {
             DtLimit::Acceleration => p.eta_acc * (p.eps_acc / acc).sqrt(),
             DtLimit::Energy => p.k_u / rate,
             DtLimit::Growth => p.max_growth * dt_prev,
-            DtLimit::Cap => unreachable!("dt_limited never caps"),
+            DtLimit::Cap | DtLimit::StepEnd => unreachable!("dt_limited never caps"),
         };
         prop_assert_eq!(dt, named);
         let without = p.dt_limited(&s, acc, 0.0, dt_prev);

@@ -30,6 +30,9 @@ pub struct CompactNeighborList {
     pub(crate) n_chunks: usize,
     // Largest h per tree node (symmetric searches).
     pub(crate) node_hmax_scratch: Vec<f64>,
+    // One flag per target when the lists serve some targets only (block
+    // time steps); empty when they serve every target.
+    pub(crate) active: Vec<bool>,
 }
 
 impl CompactNeighborList {
@@ -41,6 +44,28 @@ impl CompactNeighborList {
     /// The target particles the lists belong to.
     pub fn targets(&self) -> Range<usize> {
         self.targets.clone()
+    }
+
+    /// The targets the lists serve, one flag per target of
+    /// [`targets`](Self::targets), or `None` when they serve every target
+    /// (after [`find_compact`](crate::NeighborSearch::find_compact)). Pair
+    /// loops over the lists compute the flagged targets only.
+    pub fn active_targets(&self) -> Option<&[bool]> {
+        (!self.active.is_empty()).then_some(self.active.as_slice())
+    }
+
+    /// Marks the lists as serving the flagged targets only (one flag per
+    /// target; lists of
+    /// [`find_compact_groups`](crate::NeighborSearch::find_compact_groups)
+    /// with every flagged target in a flagged group), until the next
+    /// search.
+    ///
+    /// # Panics
+    /// If `flags` does not hold one flag per target.
+    pub fn set_active_targets(&mut self, flags: &[bool]) {
+        assert_eq!(flags.len(), self.targets.len(), "one flag per target");
+        self.active.clear();
+        self.active.extend_from_slice(flags);
     }
 
     /// Targets sharing one list: 1, or [`GROUP_LANES`](crate::GROUP_LANES)
@@ -102,6 +127,7 @@ impl CompactNeighborList {
             + self.counts.capacity() * 4
             + self.chunk_first.capacity() * 8
             + self.node_hmax_scratch.capacity() * 8
+            + self.active.capacity()
     }
 }
 

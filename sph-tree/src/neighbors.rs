@@ -344,6 +344,7 @@ impl NeighborSearch {
         let width = if self.grouped { GROUP_LANES } else { 1 };
         list.targets = targets.clone();
         list.width = width;
+        list.active.clear();
         list.counts.clear();
         list.counts.resize(nt, 0);
         list.start.clear();

@@ -319,6 +319,25 @@ fn parse_number(s: &str, ok: impl Fn(f64) -> bool, allowed: &str) -> Result<f64,
 }
 
 /// A positive finite number.
+/// A power of two from 1 to 64, as its exponent (`4` gives 2).
+pub(crate) fn parse_limiter_factor(s: &str) -> Result<u8, String> {
+    match s.parse::<u32>() {
+        Ok(f) if f.is_power_of_two() && f <= 64 => Ok(f.trailing_zeros() as u8),
+        _ => Err(format!(
+            "'{s}': the limiter factor must be a power of two from 1 to 64 (1, 2, 4, ..., 64)"
+        )),
+    }
+}
+
+/// `on` or `off`.
+pub(crate) fn parse_on_off(s: &str) -> Result<bool, String> {
+    match s {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        _ => Err(format!("'{s}': allowed values are on and off")),
+    }
+}
+
 pub(crate) fn parse_positive(s: &str) -> Result<f64, String> {
     parse_number(s, |x| x > 0.0, "a positive finite number is required")
 }

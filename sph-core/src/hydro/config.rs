@@ -5,7 +5,7 @@ use crate::integrate::HUpdate;
 use crate::neighbors::NeighborParams;
 use crate::scheme::Scheme;
 use crate::stirring::StirParams;
-use crate::timestep::TimestepParams;
+use crate::timestep::{TimeSteps, TimestepParams};
 use crate::{CoreError, FieldSet};
 use sph_gravity::GravityParams;
 use sph_tree::Curve;
@@ -45,6 +45,8 @@ pub struct HydroConfig {
     /// none: each step adds the stirring acceleration, net impulse
     /// removed, and reports its work.
     pub stirring: Option<StirParams>,
+    /// One global time step, or block time steps (each particle its own).
+    pub time_steps: TimeSteps,
 }
 
 impl Default for HydroConfig {
@@ -60,6 +62,7 @@ impl Default for HydroConfig {
             gravity: None,
             bin_report: false,
             stirring: None,
+            time_steps: TimeSteps::Global,
         }
     }
 }
@@ -106,10 +109,43 @@ impl HydroConfig {
         if let Some(stir) = &self.stirring {
             stir.validate()?;
         }
+        if self.time_steps == TimeSteps::Block {
+            self.block_support()?;
+        }
         if self.bucket == 0 {
             return Err(CoreError::Invalid("bucket size must be at least 1".into()));
         }
         Ok(())
+    }
+
+    /// What block time steps do not cover yet, named: the fields a
+    /// scheme's stages read from inactive neighbours must be in the
+    /// particle table (`docs/block-timesteps.md`, section 2).
+    fn block_support(&self) -> Result<(), CoreError> {
+        let s = &self.scheme;
+        let missing = if self.gravity.is_some() {
+            Some("self-gravity")
+        } else if self.stirring.is_some() {
+            Some("turbulence driving")
+        } else if s.volume != crate::Volume::Mass {
+            Some("generalised or pressure-energy volumes (--volume mass only)")
+        } else if s.switches().is_some() {
+            Some("viscosity switches (a constant alpha only)")
+        } else if s.balsara {
+            Some("the Balsara limiter")
+        } else if s.av_cleaning {
+            Some("viscosity cleaning")
+        } else if !self.eos.uses_internal_energy() {
+            Some("a barotropic equation of state")
+        } else {
+            None
+        };
+        match missing {
+            Some(what) => Err(CoreError::Invalid(format!(
+                "--time-steps block does not cover {what} yet; use --time-steps global (or the scheme paper or std)"
+            ))),
+            None => Ok(()),
+        }
     }
 
     /// The optional per-particle fields a run with this configuration
@@ -117,6 +153,7 @@ impl HydroConfig {
     pub fn fields(&self) -> FieldSet {
         FieldSet {
             eos_ref: self.eos.needs_reference(),
+            block: self.time_steps == TimeSteps::Block,
             ..self.scheme.fields(self.gravity.is_some())
         }
     }

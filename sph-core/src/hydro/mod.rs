@@ -50,12 +50,14 @@ macro_rules! hydro_state {
     };
 }
 
+mod block;
 mod buffers;
 mod config;
 mod report;
 mod stages;
 mod stir;
 
+use block::BlockState;
 use buffers::StepBuffers;
 pub use config::HydroConfig;
 pub use report::{DomainStepStats, RunState, Stage, StageTimes, StepReport, BIN_OFFSETS, STAGES};
@@ -87,6 +89,8 @@ pub struct Hydro<K: Kernel, C: Communicator = SerialComm> {
     t: f64,
     dt_prev: f64,
     dt_cap: f64,
+    /// Block time steps: the time line, the current tick and work arrays.
+    block: BlockState,
 }
 
 impl<K: Kernel> Hydro<K> {
@@ -151,6 +155,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             t: t0,
             dt_prev: dt0,
             dt_cap: f64::INFINITY,
+            block: BlockState::default(),
         })
     }
 
@@ -248,6 +253,9 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         p: &mut Particles,
         bbox: &mut BoundingBox,
     ) -> Result<StepReport, CoreError> {
+        if self.config.time_steps == crate::TimeSteps::Block {
+            return self.substep(p, bbox);
+        }
         let step = self.step + 1;
         p.check(self.config.fields())?;
         let mut clock = StageClock::start();
@@ -261,7 +269,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         self.tree
             .rebuild(self.domain.keys(), &p.x, &p.y, &p.z, self.config.bucket)?;
         clock.lap(Stage::Tree);
-        let neighbours = self.search(p, bbox, step, owned.clone())?;
+        let neighbours = self.search(p, bbox, step, owned.clone(), None)?;
         self.release_tree_after_search();
         clock.lap(Stage::Neighbors);
         self.density(p, bbox)?;
@@ -305,7 +313,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         // One global sum: conserved quantities, neighbour and domain totals,
         // and the stirring's work terms.
         let sync = self.domain.stats();
-        let (conserved, [nc_total, over_cap, halos_total, bytes_sent], work_terms) =
+        let (conserved, [nc_total, over_cap, halos_total, bytes_sent, updates], work_terms) =
             Conserved::compute_with(
                 p,
                 owned.clone(),
@@ -314,6 +322,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                     neighbours.over_cap as f64,
                     sync.halos as f64,
                     sync.bytes_sent as f64,
+                    sync.owned as f64,
                 ],
                 self.stir_work_sums(p, owned.clone()),
                 self.domain.comm(),
@@ -396,6 +405,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         self.t += dt;
         self.dt_prev = dt;
         self.step = step;
+        self.block.updates += updates as u64;
         Ok(StepReport {
             step,
             t,
@@ -423,6 +433,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 sync_seconds_max: ext.sync_seconds_max,
             },
             bins,
+            updates: updates as u64,
         })
     }
 
@@ -439,7 +450,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         let owned = self.domain.sync_with(p, bbox, self.next_h_max.take())?;
         self.tree
             .rebuild(self.domain.keys(), &p.x, &p.y, &p.z, self.config.bucket)?;
-        self.search(p, bbox, self.step, owned.clone())?;
+        self.search(p, bbox, self.step, owned.clone(), None)?;
         self.release_tree_after_search();
         self.density(p, bbox)?;
         self.eos(p, owned.clone())?;

@@ -228,6 +228,9 @@ pub struct StepReport {
     /// at least `2^k` times `dt` and, below the last entry, less than
     /// `2^(k+1)` times.
     pub bins: Option<[u64; BIN_OFFSETS]>,
+    /// Particle updates of the step (all ranks): every particle in a
+    /// global run, the active ones in a block-step sub-step.
+    pub updates: u64,
 }
 
 /// The entries of [`StepReport::bins`].

@@ -13,7 +13,7 @@ use crate::momentum::{
     momentum_energy_with, Alpha, ArtificialStress, AvCleaning, Criteria, HydroState,
     MomentumScheme, MomentumStats, Rates, VolumeWeights,
 };
-use crate::neighbors::find_neighbors;
+use crate::neighbors::find_neighbors_of;
 use crate::scheme::{Viscosity, Volume};
 use crate::{CoreError, Particles};
 use rayon::prelude::*;
@@ -178,7 +178,8 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         let n = p.len();
         let state = hydro_state!(p);
         let (hv, comp) = (&mut self.buf.h_over_vsig, &mut self.buf.compression);
-        let criteria = self.config.bin_report.then(|| {
+        let block = self.config.time_steps == crate::TimeSteps::Block;
+        let criteria = (self.config.bin_report || block).then(|| {
             hv.resize(n, 0.0);
             comp.resize(n, 0.0);
             Criteria {
@@ -396,6 +397,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         bbox: &BoundingBox,
         step: u64,
         owned: Range<usize>,
+        active: Option<&[bool]>,
     ) -> Result<NeighborStats, CoreError> {
         let h_limit = self.domain.h_limit();
         let params = if self.config.scheme.fixed_h {
@@ -404,17 +406,16 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             self.config.neighbors
         };
         let run = |p: &mut Particles, list: &mut CompactNeighborList| {
-            find_neighbors(
+            find_neighbors_of(
                 &params,
                 self.config.h_update,
                 &self.tree,
                 bbox,
-                &p.x,
-                &p.y,
-                &p.z,
+                [&p.x, &p.y, &p.z],
                 &mut p.h,
                 &p.id,
                 owned.clone(),
+                active,
                 h_limit,
                 list,
                 &mut p.nc,
@@ -564,7 +565,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
 /// unless `energy` (the pressure reads `u`; only then are the fields read)
 /// and `u > 0` is falling.
 #[inline]
-fn cooling_rate(p: &Particles, i: usize, energy: bool) -> f64 {
+pub(super) fn cooling_rate(p: &Particles, i: usize, energy: bool) -> f64 {
     if energy && p.u[i] > 0.0 && p.du[i] < 0.0 {
         -p.du[i] / p.u[i]
     } else {

@@ -6,13 +6,13 @@ use super::scheme_args::{SchemeArgs, HEADING};
 use crate::cases::scene::SceneGravity;
 use crate::cli::parse::{
     case_names, choice, parse_checkpoint_every, parse_count, parse_courant, parse_duration,
-    parse_eos, parse_field_list, parse_keep, parse_kernel, parse_non_negative, parse_positive,
-    parse_side, parse_steps, parse_stir, parse_threads, parse_times, snapshot_fields_help,
-    CheckpointSpec, FieldList, StirArg, Times,
+    parse_eos, parse_field_list, parse_keep, parse_kernel, parse_limiter_factor,
+    parse_non_negative, parse_on_off, parse_positive, parse_side, parse_steps, parse_stir,
+    parse_threads, parse_times, snapshot_fields_help, CheckpointSpec, FieldList, StirArg, Times,
 };
 use crate::cli::parse::{parse_boundary, parse_box, parse_gravity, BoundaryArg, BoxArg};
 use clap::{Args, Parser, ValueEnum};
-use sph_core::timestep::FirstStep;
+use sph_core::timestep::{FirstStep, TimeSteps};
 use sph_core::Eos;
 use sph_kernels::KernelChoice;
 use std::path::PathBuf;
@@ -118,6 +118,28 @@ pub(crate) struct RunArgs {
     /// fewer to t = 0.05.
     #[arg(long, value_parser = choice::<FirstStep>())]
     pub(crate) first_step: Option<FirstStep>,
+    /// How particles share time steps (default: global). `block` gives
+    /// each particle its own power-of-two fraction of a longest step
+    /// (`--dt-max`), with a limiter: a blast's cold gas then takes a few
+    /// long steps while the shock takes many short ones. For now `block`
+    /// covers ideal-gas hydro with a constant viscosity (schemes `paper`,
+    /// `std`), without gravity or driving; its outputs are written at the
+    /// sub-steps that reach them (`docs/block-timesteps.md`).
+    #[arg(long, value_parser = choice::<TimeSteps>())]
+    pub(crate) time_steps: Option<TimeSteps>,
+    /// Block time steps: the longest step a particle may take (default:
+    /// an eighth of the run's span to its end time).
+    #[arg(long, value_name = "DT", value_parser = parse_positive)]
+    pub(crate) dt_max: Option<f64>,
+    /// Block time steps: the limiter (Saitoh & Makino 2009; default on).
+    /// `off` lets a particle's step run far above its neighbours' and
+    /// leaves it asleep when a shock reaches it: for tests only.
+    #[arg(long, value_name = "on|off", value_parser = parse_on_off)]
+    pub(crate) limiter: Option<bool>,
+    /// Block time steps: how many times longer than its neighbours'
+    /// steps a particle's step may be, a power of two (default 4).
+    #[arg(long, value_name = "F", value_parser = parse_limiter_factor)]
+    pub(crate) limiter_factor: Option<u8>,
     /// Leave out the grad-h correction (Omega = 1): `--grad-h off`.
     #[arg(long, conflicts_with = "grad_h", help_heading = HEADING)]
     pub(crate) no_grad_h: bool,

@@ -217,6 +217,14 @@ fn execute(a: RunArgs) -> Result<(), AppError> {
     config.neighbors.ng0 = a.ng0;
     config.neighbors.ngmax = a.ngmax;
     config.bin_report = a.report_bins;
+    config.time_steps = a.time_steps.unwrap_or_default();
+    config.timestep.dt_max = a.dt_max;
+    if let Some(on) = a.limiter {
+        config.timestep.limiter = on;
+    }
+    if let Some(d) = a.limiter_factor {
+        config.timestep.limiter_delta = d;
+    }
     let stop = match (a.steps, a.end_time) {
         (Some(s), _) => Stop::Steps(s),
         (None, Some(t)) => Stop::Time(t),
@@ -336,6 +344,12 @@ fn execute(a: RunArgs) -> Result<(), AppError> {
     };
     let result = sim.and_then(|mut sim| {
         sim.set_write_particles(a.write_particles);
+        if let Some(te) = a
+            .end_time
+            .or_else(|| user_scene.is_none().then(|| case.default_end_time()))
+        {
+            sim.set_time_line_end(te);
+        }
         sim.set_rank_timings(a.rank_timings);
         sim.set_after_step(Some(crate::memory::return_free_heap_to_os));
         // Self-gravity's default momentum bound is the tree's accuracy.

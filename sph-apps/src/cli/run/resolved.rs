@@ -95,6 +95,21 @@ pub(crate) fn resolved_config(
         "first-step",
         Value::String(config.timestep.first_step.name().into()),
     );
+    // Block-step runs only: others keep their config.toml.
+    if config.time_steps == sph_core::TimeSteps::Block {
+        set("time-steps", Value::String(config.time_steps.name().into()));
+        if let Some(d) = config.timestep.dt_max {
+            set("dt-max", Value::Float(d));
+        }
+        set(
+            "limiter",
+            Value::String(if config.timestep.limiter { "on" } else { "off" }.into()),
+        );
+        set(
+            "limiter-factor",
+            Value::Integer(1i64 << config.timestep.limiter_delta),
+        );
+    }
     for o in SCHEME_OPTIONS {
         set(o.key, toml_value((o.get)(s)));
     }

@@ -1,0 +1,670 @@
+//! Block time steps ([`TimeSteps::Block`](crate::TimeSteps::Block)): one
+//! call of [`Hydro::step`] is one sub-step of the hierarchy
+//! (`docs/block-timesteps.md`).
+//!
+//! Each particle steps `2^bin` ticks of an integer time line
+//! ([`TimeLine`]) from a multiple of that length; a sub-step ends at the
+//! nearest step end of any particle. The particles whose step ends there
+//! (the active ones) get new forces and are kicked with the global
+//! integrator's formulas over their own step: with `dX` the displacement
+//! of the step just finished and `dt_b` its length,
+//! `v_n = dX / dt_b + a_n dt_b / 2`, then the new bin `b'`,
+//! `dX' = (v_n + a_n dt_b' / 2) dt_b'`, and the Adams-Bashforth correction
+//! of `u` over `dt_b'`. Every particle then drifts to the next step end:
+//! `x += dX' (ticks / 2^bin)`, `v += a dt`, `u += du dt`; inactive
+//! particles keep their density, accelerations and matrices (held fields)
+//! and get `P`, `c` of their drifted `u`. With one bin for all, this is
+//! the global run's arithmetic, bit for bit.
+//!
+//! The limiter: a new bin is at most `limiter_delta` above the smallest
+//! bin among the particle's neighbours, and an active particle wakes the
+//! neighbours whose bin is more than `limiter_delta` above its new one:
+//! their step is cut to one of `2^(b' + delta)` ticks containing now,
+//! with the velocity they would have had at its start.
+//!
+//! Every sub-step syncs the domain (migration, halos) and rebuilds the
+//! tree; only the pair stages are restricted to the active particles.
+
+use super::report::{DomainStepStats, Stage, StageClock};
+use super::{grow_open_axes, Hydro, StepReport};
+use crate::conserved::Conserved;
+use crate::density::Positions;
+use crate::momentum::HydroState;
+use crate::pair_loop::{neighbour_lanes, F64s, Group, PairLoop, PairStage};
+use crate::timeline::{is_active, step_begin, Bin, Ticks, TimeLine, LINE};
+use crate::timestep::DtLimit;
+use crate::{CoreError, Particles};
+use rayon::prelude::*;
+use sph_comm::{Communicator, ReduceOp};
+use sph_kernels::Kernel;
+use sph_tree::{BoundingBox, CompactNeighborList, NeighborStats};
+use std::ops::Range;
+use std::sync::atomic::{AtomicU8, Ordering};
+
+/// The block-step state of a pipeline besides the particles' bins.
+#[derive(Debug, Default)]
+pub(super) struct BlockState {
+    /// The integer time line (set by [`Hydro::set_time_line`]).
+    pub(super) line: Option<TimeLine>,
+    /// The current tick.
+    pub(super) ti: Ticks,
+    /// Whether the particles hold bins (false before the first sub-step).
+    pub(super) started: bool,
+    /// Particle updates so far (active particles summed over sub-steps).
+    pub(super) updates: u64,
+    /// Work arrays: active flags of the owned particles, their new bins,
+    /// the smallest neighbour bins, and the wake-up requests of every
+    /// local particle.
+    active: Vec<bool>,
+    rho_before: Vec<f64>,
+    new_bin: Vec<u8>,
+    neighbour_bin: Vec<f64>,
+    wake: Vec<AtomicU8>,
+}
+
+/// A particle's bin, stored as an exact `f64` in `Particles::bin`.
+#[inline]
+fn bin_of(stored: f64) -> Bin {
+    Bin(stored as u8)
+}
+
+impl<K: Kernel, C: Communicator> Hydro<K, C> {
+    /// The time line of a block-step run, from the current time to
+    /// `t_end` (the run's end), with the longest step
+    /// [`TimestepParams::dt_max`](crate::TimestepParams::dt_max) (an
+    /// eighth of the span when unset). The run then ends exactly at
+    /// `t_end`. Call it before the first step; global runs ignore it.
+    ///
+    /// # Errors
+    /// An end not after the current time, or a longest step below one
+    /// tick.
+    pub fn set_time_line(&mut self, t_end: f64) -> Result<(), CoreError> {
+        let span = t_end - self.t;
+        let dt_max = self.config.timestep.dt_max.unwrap_or(span / 8.0);
+        self.block.line = Some(TimeLine::new(self.t, t_end, dt_max)?);
+        self.block.ti = 0;
+        Ok(())
+    }
+
+    /// The block-step time line, when set.
+    pub fn time_line(&self) -> Option<&TimeLine> {
+        self.block.line.as_ref()
+    }
+
+    /// Particle updates so far: the active particles summed over the
+    /// sub-steps of a block-step run, particles times steps in a global
+    /// one.
+    pub fn particle_updates(&self) -> u64 {
+        self.block.updates
+    }
+
+    /// One sub-step of a block-step run (see the module's text).
+    pub(super) fn substep(
+        &mut self,
+        p: &mut Particles,
+        bbox: &mut BoundingBox,
+    ) -> Result<StepReport, CoreError> {
+        let step = self.step + 1;
+        p.check(self.config.fields())?;
+        let line = self.block.line.ok_or_else(|| {
+            CoreError::Invalid(
+                "block time steps need a time line: call Hydro::set_time_line with the run's end time before the first step".into(),
+            )
+        })?;
+        if self.block.ti >= LINE {
+            return Err(CoreError::Invalid(format!(
+                "block time steps: the time line ends at t = {}; set a later end",
+                line.time(LINE)
+            )));
+        }
+        let mut clock = StageClock::start();
+        self.release_step_buffers();
+        let owned = self.domain.sync_with(p, bbox, self.next_h_max.take())?;
+        clock.lap(Stage::Sync);
+        self.tree
+            .rebuild(self.domain.keys(), &p.x, &p.y, &p.z, self.config.bucket)?;
+        clock.lap(Stage::Tree);
+
+        let ti = self.block.ti;
+        let first = !self.block.started;
+        let mut active = std::mem::take(&mut self.block.active);
+        active.clear();
+        active.extend(
+            owned
+                .clone()
+                .map(|i| first || is_active(ti, bin_of(p.bin[i]))),
+        );
+        let active_here = active.iter().filter(|&&a| a).count();
+        let searched = self.search(p, bbox, step, owned.clone(), Some(&active));
+        self.block.active = active;
+        let neighbours = searched?;
+        clock.lap(Stage::Neighbors);
+        let before = &mut self.block.rho_before;
+        before.clear();
+        before.extend_from_slice(&p.rho[owned.clone()]);
+        self.density(p, bbox)?;
+        self.density_rates(p, &line, owned.clone(), first);
+        clock.lap(Stage::Density);
+        // Every owned particle: the active ones from their new density,
+        // the others from their held density and drifted u.
+        self.eos(p, owned.clone())?;
+        if step == 1 {
+            self.calibrate_energy(p, owned.clone());
+        }
+        clock.lap(Stage::Eos);
+        self.exchange_thermo(p)?;
+        clock.lap(Stage::Halos);
+        if self.config.scheme.gradients == crate::momentum::Gradients::Iad {
+            self.iad(p, bbox, step, false)?;
+            clock.lap(Stage::Iad);
+            let [c0, c1, c2, c3, c4, c5] = &mut p.iad;
+            self.domain
+                .exchange(&mut [c0, c1, c2, c3, c4, c5].map(|c| c.as_mut_slice()))?;
+            clock.lap(Stage::Halos);
+        }
+        self.buf
+            .factors
+            .fill_with(&hydro_state!(p), self.config.scheme.volume, &self.buf.kx);
+        self.momentum(p, bbox);
+        clock.lap(Stage::Momentum);
+        if first {
+            // Adams-Bashforth needs du_{n-1}; the first step uses du_0.
+            p.du_prev[owned.clone()].copy_from_slice(&p.du[owned.clone()]);
+        }
+
+        let sync = self.domain.stats();
+        let (conserved, [nc_total, over_cap, halos_total, bytes_sent, updates], _) =
+            Conserved::compute_with(
+                p,
+                owned.clone(),
+                [
+                    neighbours.total as f64,
+                    neighbours.over_cap as f64,
+                    sync.halos as f64,
+                    sync.bytes_sent as f64,
+                    active_here as f64,
+                ],
+                [],
+                self.domain.comm(),
+            );
+        clock.lap(Stage::Conserved);
+
+        self.new_bins(p, bbox, &line, owned.clone(), ti, first)?;
+        let fallbacks = self.kick(p, &line, owned.clone(), ti, first, step)?;
+        let (next, limit) = self.next_tick(p, owned.clone(), ti);
+        clock.lap(Stage::Timestep);
+
+        let reach = self.drift(p, bbox, &line, owned.clone(), ti, next, step)?;
+        grow_open_axes(bbox, reach)?;
+        clock.lap(Stage::Integrate);
+
+        let (nc_min, nc_max, h_max) =
+            owned_extremes(p, owned.clone(), &neighbours, &self.block.active);
+        let mut ext = [
+            -nc_min,
+            nc_max,
+            h_max,
+            sync.owned as f64,
+            -(sync.owned as f64),
+        ];
+        let comm = self.domain.comm();
+        comm.all_reduce(&mut ext, ReduceOp::Max);
+        let halo_ratio =
+            comm.all_reduce_scalar(sync.halos as f64 / sync.owned.max(1) as f64, ReduceOp::Max);
+        let comm_times = [sync.comm_seconds, sync.sync_seconds];
+        let mut times = comm_times;
+        comm.all_reduce(&mut times, ReduceOp::Max);
+        self.next_h_max = Some(ext[2]);
+
+        let t = self.t;
+        let t_next = line.time(next);
+        let dt = t_next - t;
+        self.block.ti = next;
+        self.block.started = true;
+        self.block.updates += updates as u64;
+        self.t = t_next;
+        self.dt_prev = dt;
+        self.step = step;
+        Ok(StepReport {
+            step,
+            t,
+            dt,
+            dt_limit: limit,
+            conserved,
+            external_work: self.external_work,
+            neighbors: NeighborStats {
+                min_count: (-ext[0]).max(0.0) as usize,
+                max_count: ext[1] as usize,
+                total: nc_total as usize,
+                over_cap: over_cap as usize,
+                first_over_cap: neighbours.first_over_cap,
+            },
+            times: clock.times,
+            energy_fallbacks: fallbacks,
+            domain: DomainStepStats {
+                owned_min: (-ext[4]) as usize,
+                owned_max: ext[3] as usize,
+                halos_total: halos_total as usize,
+                halo_ratio_max: halo_ratio,
+                bytes_sent: bytes_sent as u64,
+                comm_seconds_max: times[0],
+                sync_seconds_max: times[1],
+            },
+            bins: None,
+            updates: updates as u64,
+        })
+    }
+
+    /// The new bins of the active particles (into `block.new_bin`, one per
+    /// owned particle; the inactive keep theirs), and with the limiter
+    /// the wake-up requests they make of their neighbours
+    /// (`block.wake`, every local particle, brought to the owners).
+    fn new_bins(
+        &mut self,
+        p: &Particles,
+        bbox: &BoundingBox,
+        line: &TimeLine,
+        owned: Range<usize>,
+        ti: Ticks,
+        first: bool,
+    ) -> Result<(), CoreError> {
+        let ts = self.config.timestep;
+        let delta = ts.limiter_delta;
+        let n = p.len();
+        let o = owned.start;
+        let b = &mut self.block;
+        b.neighbour_bin.clear();
+        b.neighbour_bin.resize(owned.len(), f64::INFINITY);
+        if ts.limiter && !first {
+            let driver = pair_driver(&self.kernel, bbox, p, &self.list)?;
+            driver.run(
+                &NeighbourBins {
+                    h: &p.h,
+                    support: self.kernel.support(),
+                    bin: &p.bin,
+                },
+                [&mut b.neighbour_bin[..]],
+            );
+        }
+        let (hv, comp) = (&self.buf.h_over_vsig, &self.buf.compression);
+        let energy = self.config.eos.uses_internal_energy();
+        b.new_bin.clear();
+        b.new_bin.resize(owned.len(), 0);
+        let (active, nb) = (&b.active, &b.neighbour_bin);
+        b.new_bin
+            .par_iter_mut()
+            .enumerate()
+            .try_for_each(|(k, out)| {
+                let i = o + k;
+                if !active[k] {
+                    *out = bin_of(p.bin[i]).0;
+                    return Ok(());
+                }
+                let cooling = super::stages::cooling_rate(p, i, energy);
+                let dt = ts.particle_dt(hv[i], comp[i], 0.0, cooling);
+                let old = (!first).then(|| bin_of(p.bin[i]));
+                let ngb = nb[k].is_finite().then(|| bin_of(nb[k]));
+                let (bin, _) = line
+                    .new_bin(dt, old, ti, ngb, delta)
+                    .map_err(|e| CoreError::Invalid(format!("particle {}: {e}", p.id[i])))?;
+                *out = bin.0;
+                Ok::<(), CoreError>(())
+            })?;
+        if !ts.limiter {
+            return Ok(());
+        }
+        b.wake.clear();
+        b.wake.resize_with(n, || AtomicU8::new(u8::MAX));
+        let driver = pair_driver(&self.kernel, bbox, p, &self.list)?;
+        driver.run(
+            &WakeUp {
+                h: &p.h,
+                support: self.kernel.support(),
+                new_bin: &b.new_bin,
+                first: o,
+                delta,
+                wake: &b.wake,
+            },
+            [],
+        );
+        if self.domain.comm().size() > 1 {
+            let mut wake: Vec<u8> = b.wake.iter().map(|w| w.load(Ordering::Relaxed)).collect();
+            self.domain.exchange_reverse_min(&mut wake)?;
+            for (w, v) in b.wake.iter().zip(wake) {
+                w.store(v, Ordering::Relaxed);
+            }
+        }
+        Ok(())
+    }
+
+    /// `d ln rho / dt` of the active particles over the step they end,
+    /// from their new density and the one predicted for now:
+    /// `ln(rho / rho_pred) / dt + dlnrho` (0 at the first sub-step).
+    fn density_rates(
+        &mut self,
+        p: &mut Particles,
+        line: &TimeLine,
+        owned: Range<usize>,
+        first: bool,
+    ) {
+        let b = &self.block;
+        let o = owned.start;
+        let (rho, bins) = (&p.rho, &p.bin);
+        p.dlnrho[owned]
+            .par_iter_mut()
+            .enumerate()
+            .filter(|(k, _)| b.active[*k])
+            .for_each(|(k, r)| {
+                let i = o + k;
+                *r = if first {
+                    0.0
+                } else {
+                    (rho[i] / b.rho_before[k]).ln() / line.dt(bin_of(bins[i])) + *r
+                };
+            });
+    }
+
+    /// Kicks the active particles over their new steps and cuts the steps
+    /// of the woken ones; returns the energy updates that fell back to
+    /// first order.
+    fn kick(
+        &mut self,
+        p: &mut Particles,
+        line: &TimeLine,
+        owned: Range<usize>,
+        ti: Ticks,
+        first: bool,
+        step: u64,
+    ) -> Result<usize, CoreError> {
+        let dt0 = self.dt_prev;
+        let guard = self.config.eos.uses_internal_energy();
+        let h_update = (!self.config.scheme.fixed_h)
+            .then(|| self.config.neighbors.h_update(self.config.h_update));
+        let limiter = self.config.timestep.limiter;
+        let b = &self.block;
+        let o = owned.start;
+        let (ax, ay, az, du, nc, id) = (&p.ax, &p.ay, &p.az, &p.du, &p.nc, &p.id);
+        let t_now = line.time(ti);
+        let r = owned.clone();
+        (
+            p.vx[r.clone()].par_iter_mut(),
+            p.vy[r.clone()].par_iter_mut(),
+            p.vz[r.clone()].par_iter_mut(),
+            p.dx[r.clone()].par_iter_mut(),
+            p.dy[r.clone()].par_iter_mut(),
+            p.dz[r.clone()].par_iter_mut(),
+            p.u[r.clone()].par_iter_mut(),
+            p.du_prev[r.clone()].par_iter_mut(),
+            p.h[r.clone()].par_iter_mut(),
+            p.bin[r.clone()].par_iter_mut(),
+        )
+            .into_par_iter()
+            .enumerate()
+            .map(|(k, (vx, vy, vz, dx, dy, dz, u, du_prev, h, bin))| {
+                let i = o + k;
+                let a = [ax[i], ay[i], az[i]];
+                let vel = [vx, vy, vz];
+                let dpos = [dx, dy, dz];
+                let woken = if limiter {
+                    b.wake[i].load(Ordering::Relaxed)
+                } else {
+                    u8::MAX
+                };
+                if !b.active[k] {
+                    let old = bin_of(*bin);
+                    if woken >= old.0 {
+                        return Ok(0);
+                    }
+                    // Cut short: a step of 2^woken ticks containing now,
+                    // from the velocity the particle had at its start.
+                    let new = Bin(woken);
+                    let since = t_now - line.time(step_begin(ti, new));
+                    let dt_new = line.dt(new);
+                    for c in 0..3 {
+                        let v_start = *vel[c] - a[c] * since;
+                        *dpos[c] = (v_start + 0.5 * a[c] * dt_new) * dt_new;
+                    }
+                    *bin = f64::from(new.0);
+                    return Ok(0);
+                }
+                let old_dt = if first { dt0 } else { line.dt(bin_of(*bin)) };
+                let new = Bin(b.new_bin[k].min(woken));
+                let dt = line.dt(new);
+                for c in 0..3 {
+                    let v_n = crate::integrate::velocity_now(*dpos[c], a[c], old_dt);
+                    *dpos[c] = (v_n + 0.5 * a[c] * dt) * dt;
+                    *vel[c] = v_n;
+                }
+                // Adams-Bashforth 2 over the new step: the correction now,
+                // du dt through the drifts; first order if that would go
+                // negative.
+                let d = du[i];
+                let mut fallback = 0;
+                let mut corr = 0.5 * (d - *du_prev) / old_dt * dt * dt;
+                let end = *u + corr + d * dt;
+                if guard && (end.is_nan() || end < 0.0 || *u + corr < 0.0) {
+                    fallback = 1;
+                    corr = 0.0;
+                    let first_order = *u + d * dt;
+                    if first_order.is_nan() || first_order < 0.0 {
+                        return Err(CoreError::NegativeEnergy {
+                            step,
+                            id: id[i],
+                            u: first_order,
+                            du: d,
+                            dt,
+                        });
+                    }
+                }
+                *u += corr;
+                *du_prev = d;
+                if let Some(hu) = h_update {
+                    *h *= hu.factor(nc[i]);
+                }
+                *bin = f64::from(new.0);
+                Ok(fallback)
+            })
+            .try_reduce(|| 0, |a, b| Ok(a + b))
+    }
+
+    /// The next tick: the nearest step end of any particle (all ranks).
+    fn next_tick(&self, p: &Particles, owned: Range<usize>, ti: Ticks) -> (Ticks, DtLimit) {
+        let local = owned
+            .into_par_iter()
+            .map(|i| {
+                let bin = bin_of(p.bin[i]);
+                step_begin(ti, bin) + bin.ticks()
+            })
+            .min()
+            .unwrap_or(LINE);
+        // Ticks are at most 2^52: exact in f64.
+        let next = self
+            .domain
+            .comm()
+            .all_reduce_scalar(local as f64, ReduceOp::Min) as Ticks;
+        (next.min(LINE), DtLimit::StepEnd)
+    }
+
+    /// Drifts every owned particle from tick `ti` to `next`: positions by
+    /// their share of the step's displacement, `v += a dt`, `u += du dt`,
+    /// then `P` and `c` are those of the drifted `u` at the next sub-step's
+    /// EOS. Returns the largest coordinate change over all ranks (for the
+    /// open axes of the box).
+    #[allow(clippy::too_many_arguments)]
+    fn drift(
+        &self,
+        p: &mut Particles,
+        bbox: &BoundingBox,
+        line: &TimeLine,
+        owned: Range<usize>,
+        ti: Ticks,
+        next: Ticks,
+        step: u64,
+    ) -> Result<f64, CoreError> {
+        let ticks = next - ti;
+        let dt = ticks as f64 * line.time_base();
+        let (ax, ay, az, du, id, bins) = (&p.ax, &p.ay, &p.az, &p.du, &p.id, &p.bin);
+        let dlnrho = &p.dlnrho;
+        let r = owned.clone();
+        let o = owned.start;
+        let moved = (
+            p.x[r.clone()].par_iter_mut(),
+            p.y[r.clone()].par_iter_mut(),
+            p.z[r.clone()].par_iter_mut(),
+            p.vx[r.clone()].par_iter_mut(),
+            p.vy[r.clone()].par_iter_mut(),
+            p.vz[r.clone()].par_iter_mut(),
+            p.dx[r.clone()].par_iter(),
+            p.dy[r.clone()].par_iter(),
+            p.dz[r.clone()].par_iter(),
+            p.u[r.clone()].par_iter_mut(),
+            p.rho[r.clone()].par_iter_mut(),
+        )
+            .into_par_iter()
+            .enumerate()
+            .map(|(k, (x, y, z, vx, vy, vz, dx, dy, dz, u, rho))| {
+                let i = o + k;
+                // An exact ratio of integers (a power of two below).
+                let share = ticks as f64 / bin_of(bins[i]).ticks() as f64;
+                let a = [ax[i], ay[i], az[i]];
+                let pos = [x, y, z];
+                let vel = [vx, vy, vz];
+                let d = [*dx, *dy, *dz];
+                let mut newp = [0.0; 3];
+                let mut moved: f64 = 0.0;
+                for c in 0..3 {
+                    let s = if share == 1.0 { d[c] } else { d[c] * share };
+                    newp[c] = *pos[c] + s;
+                    moved = moved.max(s.abs());
+                    *vel[c] += a[c] * dt;
+                }
+                let wrapped = bbox.wrap(newp);
+                for c in 0..3 {
+                    if !wrapped[c].is_finite() || !vel[c].is_finite() {
+                        return Err(CoreError::NonFinite {
+                            step,
+                            id: id[i],
+                            field: ["x", "y", "z"][c],
+                            value: if wrapped[c].is_finite() {
+                                *vel[c]
+                            } else {
+                                wrapped[c]
+                            },
+                        });
+                    }
+                    *pos[c] = wrapped[c];
+                }
+                *u += du[i] * dt;
+                *rho *= (dlnrho[i] * dt).exp();
+                Ok(moved)
+            })
+            .try_reduce(|| 0.0, |a, b| Ok(a.max(b)))?;
+        Ok(self.domain.comm().all_reduce_scalar(moved, ReduceOp::Max))
+    }
+}
+
+/// The smallest and largest neighbour count over the active owned
+/// particles (the others were not searched; none: +inf, -inf) and the
+/// largest h of the owned particles.
+fn owned_extremes(
+    p: &Particles,
+    owned: Range<usize>,
+    stats: &NeighborStats,
+    active: &[bool],
+) -> (f64, f64, f64) {
+    let h_max = p.h[owned].iter().copied().fold(0.0, f64::max);
+    if active.iter().any(|&a| a) {
+        (stats.min_count as f64, stats.max_count as f64, h_max)
+    } else {
+        (f64::INFINITY, f64::NEG_INFINITY, h_max)
+    }
+}
+
+/// The pair driver over the lists of the active particles.
+fn pair_driver<'a, K: Kernel>(
+    kernel: &K,
+    bbox: &BoundingBox,
+    p: &'a Particles,
+    list: &'a CompactNeighborList,
+) -> Result<PairLoop<'a>, CoreError> {
+    PairLoop::new(bbox, kernel.support(), [&p.x, &p.y, &p.z], &p.h, list)
+}
+
+/// The smallest bin among each target's neighbours (`r < support
+/// max(h_i, h_j)`, the target itself left out).
+struct NeighbourBins<'a> {
+    h: &'a [f64],
+    support: f64,
+    bin: &'a [f64],
+}
+
+impl PairStage for NeighbourBins<'_> {
+    type Sums = (F64s, F64s);
+    type Out<'o> = [&'o mut [f64]; 1];
+    type Stats = ();
+
+    fn start(&self, g: &Group) -> Self::Sums {
+        let reach = g.load(self.h) * self.support;
+        (reach * reach, F64s::splat(f64::INFINITY))
+    }
+
+    fn pair(&self, s: &mut Self::Sums, j: usize, _d: [F64s; 3], r2: F64s) {
+        let reach_j = self.h[j] * self.support;
+        let (_, w) = neighbour_lanes(r2, s.0, reach_j * reach_j);
+        let b = w
+            .gt(F64s::splat(0.0))
+            .select(F64s::splat(self.bin[j]), F64s::splat(f64::INFINITY));
+        s.1 = s.1.min(b);
+    }
+
+    fn finish(&self, _g: &Group, s: Self::Sums, [out]: &mut Self::Out<'_>) {
+        s.1.store(out);
+    }
+}
+
+/// The limiter's wake-up: each active target lowers `wake[j]` of its
+/// neighbours to its new bin plus `delta` (a minimum: the order of the
+/// requests does not matter).
+struct WakeUp<'a> {
+    h: &'a [f64],
+    support: f64,
+    /// New bins of the owned particles, from `first`.
+    new_bin: &'a [u8],
+    first: usize,
+    delta: u8,
+    wake: &'a [AtomicU8],
+}
+
+impl PairStage for WakeUp<'_> {
+    /// Squared reach of the targets, and the bin each asks of its
+    /// neighbours (infinite in lanes without an active target).
+    type Sums = (F64s, F64s);
+    type Out<'o> = [&'o mut [f64]; 0];
+    type Stats = ();
+
+    fn start(&self, g: &Group) -> Self::Sums {
+        let reach = g.load(self.h) * self.support;
+        let ask = std::array::from_fn(|l| {
+            if l < g.valid && g.active & (1 << l) != 0 {
+                f64::from(self.new_bin[g.first + l - self.first].saturating_add(self.delta))
+            } else {
+                f64::INFINITY
+            }
+        });
+        (reach * reach, F64s::from_array(ask))
+    }
+
+    fn pair(&self, s: &mut Self::Sums, j: usize, _d: [F64s; 3], r2: F64s) {
+        let reach_j = self.h[j] * self.support;
+        let (_, w) = neighbour_lanes(r2, s.0, reach_j * reach_j);
+        let ask = w
+            .gt(F64s::splat(0.0))
+            .select(s.1, F64s::splat(f64::INFINITY))
+            .min_lane();
+        if ask.is_finite() {
+            self.wake[j].fetch_min(ask as u8, Ordering::Relaxed);
+        }
+    }
+
+    fn finish(&self, _g: &Group, _s: Self::Sums, _out: &mut Self::Out<'_>) {}
+}
