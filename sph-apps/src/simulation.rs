@@ -229,7 +229,7 @@ impl<C: Communicator> Simulation<C> {
             )));
         }
         let (t0, dt0) = resume.map_or((0.0, scene.dt0), |s| (s.t, s.dt_prev));
-        if resume.is_some() && scene.config.time_steps == sph_core::TimeSteps::Block {
+        if resume.is_some() && scene.config.time_steps.on_time_line() {
             return Err(AppError::Usage(
                 "a block-step run cannot be restarted yet (its checkpoints do not hold the time line); restart with --time-steps global, or run from the start".into(),
             ));
@@ -387,9 +387,7 @@ impl<C: Communicator> Simulation<C> {
                 &self.scene.bbox,
             )?;
         }
-        if self.scene.config.time_steps == sph_core::TimeSteps::Block
-            && self.hydro.time_line().is_none()
-        {
+        if self.scene.config.time_steps.on_time_line() && self.hydro.time_line().is_none() {
             let end = match stop {
                 Stop::Time(te) => Some(te),
                 Stop::Steps(_) => self.line_end,

@@ -54,16 +54,28 @@ pub enum TimeSteps {
     /// (block time steps), with the same integrator's formulas over each
     /// particle's own step; inactive particles drift.
     Block,
+    /// The block-step integrator with every particle in the smallest bin
+    /// any needs: what block steps change against one step for all,
+    /// without the bins.
+    Kdk,
+}
+
+impl TimeSteps {
+    /// Whether particles step on the integer time line (block or kdk).
+    pub fn on_time_line(self) -> bool {
+        self != TimeSteps::Global
+    }
 }
 
 /// `--time-steps` and the `time-steps` key.
 impl crate::Choice for TimeSteps {
-    const ALL: &'static [Self] = &[TimeSteps::Global, TimeSteps::Block];
+    const ALL: &'static [Self] = &[TimeSteps::Global, TimeSteps::Block, TimeSteps::Kdk];
 
     fn name(&self) -> &'static str {
         match self {
             TimeSteps::Global => "global",
             TimeSteps::Block => "block",
+            TimeSteps::Kdk => "kdk",
         }
     }
 
@@ -76,6 +88,10 @@ impl crate::Choice for TimeSteps {
             TimeSteps::Block => {
                 "Each particle its own power-of-two fraction of a longest step, with a limiter \
                  (block time steps; ideal-gas hydro with constant viscosity only, for now)"
+            }
+            TimeSteps::Kdk => {
+                "The block-step integrator with every particle in the smallest bin any needs \
+                 (to tell what the bins change)"
             }
         }
     }

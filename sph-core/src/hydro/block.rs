@@ -31,8 +31,8 @@ use crate::conserved::Conserved;
 use crate::density::Positions;
 use crate::momentum::HydroState;
 use crate::pair_loop::{neighbour_lanes, F64s, Group, PairLoop, PairStage};
-use crate::timeline::{is_active, step_begin, Bin, Ticks, TimeLine, LINE};
-use crate::timestep::DtLimit;
+use crate::timeline::{is_active, step_begin, Bin, Ticks, TimeLine, LINE, MAX_BIN};
+use crate::timestep::{DtLimit, TimeSteps};
 use crate::{CoreError, Particles};
 use rayon::prelude::*;
 use sph_comm::{Communicator, ReduceOp};
@@ -89,6 +89,12 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
     /// The block-step time line, when set.
     pub fn time_line(&self) -> Option<&TimeLine> {
         self.block.line.as_ref()
+    }
+
+    /// The current tick of the time line (block-step runs; 0 before the
+    /// first sub-step).
+    pub fn tick(&self) -> Ticks {
+        self.block.ti
     }
 
     /// Particle updates so far: the active particles summed over the
@@ -275,7 +281,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         let b = &mut self.block;
         b.neighbour_bin.clear();
         b.neighbour_bin.resize(owned.len(), f64::INFINITY);
-        if ts.limiter && !first {
+        if ts.limiter && !first && self.config.time_steps == TimeSteps::Block {
             let driver = pair_driver(&self.kernel, bbox, p, &self.list)?;
             driver.run(
                 &NeighbourBins {
@@ -310,28 +316,66 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 *out = bin.0;
                 Ok::<(), CoreError>(())
             })?;
-        if !ts.limiter {
+        if self.config.time_steps == TimeSteps::Kdk {
+            // One bin for all: every particle is active at every sub-step.
+            let local = b.new_bin.iter().copied().min().unwrap_or(MAX_BIN);
+            let all = self
+                .domain
+                .comm()
+                .all_reduce_scalar(f64::from(local), ReduceOp::Min) as u8;
+            b.new_bin.fill(all);
+        }
+        if !ts.limiter || self.config.time_steps == TimeSteps::Kdk {
+            b.wake.clear();
             return Ok(());
         }
         b.wake.clear();
         b.wake.resize_with(n, || AtomicU8::new(u8::MAX));
-        let driver = pair_driver(&self.kernel, bbox, p, &self.list)?;
-        driver.run(
-            &WakeUp {
+        // Wake-ups until no active particle is lowered: an active
+        // particle woken by another wakes its own neighbours in the same
+        // sub-step, so every active particle ends within the factor of
+        // all its neighbours (a fixed point: the same on any rank count).
+        let mut lowered: Vec<bool> = Vec::new();
+        loop {
+            let driver = pair_driver(&self.kernel, bbox, p, &self.list)?;
+            let stage = WakeUp {
                 h: &p.h,
                 support: self.kernel.support(),
                 new_bin: &b.new_bin,
                 first: o,
                 delta,
                 wake: &b.wake,
-            },
-            [],
-        );
-        if self.domain.comm().size() > 1 {
-            let mut wake: Vec<u8> = b.wake.iter().map(|w| w.load(Ordering::Relaxed)).collect();
-            self.domain.exchange_reverse_min(&mut wake)?;
-            for (w, v) in b.wake.iter().zip(wake) {
-                w.store(v, Ordering::Relaxed);
+            };
+            if lowered.is_empty() {
+                driver.run(&stage, []);
+            } else {
+                driver.run_masked(&stage, [], &lowered);
+            }
+            if self.domain.comm().size() > 1 {
+                let mut wake: Vec<u8> = b.wake.iter().map(|w| w.load(Ordering::Relaxed)).collect();
+                self.domain.exchange_reverse_min(&mut wake)?;
+                for (w, v) in b.wake.iter().zip(wake) {
+                    w.store(v, Ordering::Relaxed);
+                }
+            }
+            lowered.clear();
+            lowered.extend((0..owned.len()).map(|k| {
+                let w = b.wake[o + k].load(Ordering::Relaxed);
+                b.active[k] && w < b.new_bin[k]
+            }));
+            let mut count = 0u64;
+            for (k, &l) in lowered.iter().enumerate() {
+                if l {
+                    b.new_bin[k] = b.wake[o + k].load(Ordering::Relaxed);
+                    count += 1;
+                }
+            }
+            let count = self
+                .domain
+                .comm()
+                .all_reduce_scalar(count as f64, ReduceOp::Sum);
+            if count == 0.0 {
+                break;
             }
         }
         Ok(())
@@ -380,7 +424,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         let guard = self.config.eos.uses_internal_energy();
         let h_update = (!self.config.scheme.fixed_h)
             .then(|| self.config.neighbors.h_update(self.config.h_update));
-        let limiter = self.config.timestep.limiter;
+        let limiter = !self.block.wake.is_empty();
         let b = &self.block;
         let o = owned.start;
         let (ax, ay, az, du, nc, id) = (&p.ax, &p.ay, &p.az, &p.du, &p.nc, &p.id);

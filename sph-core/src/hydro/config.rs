@@ -109,7 +109,7 @@ impl HydroConfig {
         if let Some(stir) = &self.stirring {
             stir.validate()?;
         }
-        if self.time_steps == TimeSteps::Block {
+        if self.time_steps.on_time_line() {
             self.block_support()?;
         }
         if self.bucket == 0 {
@@ -142,7 +142,8 @@ impl HydroConfig {
         };
         match missing {
             Some(what) => Err(CoreError::Invalid(format!(
-                "--time-steps block does not cover {what} yet; use --time-steps global (or the scheme paper or std)"
+                "--time-steps {} does not cover {what} yet; use --time-steps global (or the scheme paper or std)",
+                crate::Choice::name(&self.time_steps)
             ))),
             None => Ok(()),
         }
@@ -153,7 +154,7 @@ impl HydroConfig {
     pub fn fields(&self) -> FieldSet {
         FieldSet {
             eos_ref: self.eos.needs_reference(),
-            block: self.time_steps == TimeSteps::Block,
+            block: self.time_steps.on_time_line(),
             ..self.scheme.fields(self.gravity.is_some())
         }
     }

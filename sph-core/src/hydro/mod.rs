@@ -253,7 +253,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         p: &mut Particles,
         bbox: &mut BoundingBox,
     ) -> Result<StepReport, CoreError> {
-        if self.config.time_steps == crate::TimeSteps::Block {
+        if self.config.time_steps.on_time_line() {
             return self.substep(p, bbox);
         }
         let step = self.step + 1;

@@ -178,7 +178,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         let n = p.len();
         let state = hydro_state!(p);
         let (hv, comp) = (&mut self.buf.h_over_vsig, &mut self.buf.compression);
-        let block = self.config.time_steps == crate::TimeSteps::Block;
+        let block = self.config.time_steps.on_time_line();
         let criteria = (self.config.bin_report || block).then(|| {
             hv.resize(n, 0.0);
             comp.resize(n, 0.0);

@@ -96,7 +96,7 @@ pub(crate) fn resolved_config(
         Value::String(config.timestep.first_step.name().into()),
     );
     // Block-step runs only: others keep their config.toml.
-    if config.time_steps == sph_core::TimeSteps::Block {
+    if config.time_steps.on_time_line() {
         set("time-steps", Value::String(config.time_steps.name().into()));
         if let Some(d) = config.timestep.dt_max {
             set("dt-max", Value::Float(d));
