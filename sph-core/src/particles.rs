@@ -62,6 +62,16 @@ impl Particles {
         self.alpha = vec![alpha0; self.len()];
     }
 
+    /// Gives every particle the fields of block time steps (its bin and
+    /// density rate, zero until its first step) and holds the derived
+    /// fields inactive particles keep. Runs whose [`FieldSet`] comes from
+    /// a block-step configuration hold them from the start.
+    pub fn enable_block_steps(&mut self) {
+        self.fields.block = true;
+        self.bin = vec![0.0; self.len()];
+        self.dlnrho = vec![0.0; self.len()];
+    }
+
     /// Gives every particle the reference state of a referenced EOS,
     /// zero (the density then comes from the first density evaluation).
     pub fn enable_eos_ref(&mut self) {

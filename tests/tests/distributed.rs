@@ -33,11 +33,13 @@ use std::time::{Duration, Instant};
 /// Particles per side and steps of each run: (case, side, steps). Every
 /// registered case runs (with [`DEFAULT_SIZE`] unless listed here), then
 /// the test-only `drift` case.
-const SIZES: [(&str, usize, u64); 7] = [
+const SIZES: [(&str, usize, u64); 8] = [
     ("sedov", 24, 20),
     // Its box is 0.25 across: 32 per unit length gives the kernel room.
     ("wind-shock", 32, 20),
     ("sedov-ve", 24, 20),
+    // Block time steps: 30 sub-steps over bins 45-49 of a line to 0.05.
+    ("sedov-block", 24, 30),
     ("square-patch", 20, 20),
     ("noh", 20, 20),
     ("drift", 16, 30),
@@ -46,13 +48,14 @@ const SIZES: [(&str, usize, u64); 7] = [
 /// Side and steps of a registered case missing from [`SIZES`].
 const DEFAULT_SIZE: (usize, u64) = (16, 20);
 
-/// The runs: every registered case, then `drift` and `sedov-ve`, with
+/// The runs: every registered case, then `drift`, `sedov-ve` and
+/// `sedov-block` (block time steps: wake-ups brought to their owners), with
 /// their sizes (only those in `SPH_DISTRIBUTED_ONLY`, when set).
 fn runs() -> Vec<(&'static str, usize, u64)> {
     let only = std::env::var("SPH_DISTRIBUTED_ONLY").ok();
     cases::names()
         .into_iter()
-        .chain(["drift", "sedov-ve"])
+        .chain(["drift", "sedov-ve", "sedov-block"])
         .filter(|case| {
             only.as_ref()
                 .is_none_or(|o| o.split(',').any(|c| c == *case))
@@ -108,6 +111,12 @@ fn scene(case: &str) -> Scene {
         s.reference = None;
         return s;
     }
+    if case == "sedov-block" {
+        let mut s = sph_validation::scene("sedov", side);
+        s.config.time_steps = sph_core::TimeSteps::Block;
+        s.config.timestep.first_step = sph_core::timestep::FirstStep::Criteria;
+        return s;
+    }
     if case == "sedov-ve" {
         let mut s = sph_validation::scene("sedov", side);
         s.config.scheme = sph_core::Scheme::VE;
@@ -133,11 +142,14 @@ fn child(mode: &str, case: &str, out: &Path, threads: usize) {
         rank = comm.rank();
         let mut sim = Simulation::with_comm(scene(case), kernel, name, comm).expect("set-up");
         sim.set_write_particles(true);
+        sim.set_time_line_end(0.05);
         sim.run(Stop::Steps(steps), out, Progress::Quiet)
     } else {
         let mut sim =
             Simulation::with_comm(scene(case), kernel, name, SerialComm::new()).expect("set-up");
         sim.set_write_particles(true);
+        // Block-step runs (sedov-block) end their time line at Sedov's end.
+        sim.set_time_line_end(0.05);
         sim.run(Stop::Steps(steps), out, Progress::Quiet)
     };
     match summary {

@@ -11,10 +11,13 @@
 //! `v_n = dX / dt_b + a_n dt_b / 2`, then the new bin `b'`,
 //! `dX' = (v_n + a_n dt_b' / 2) dt_b'`, and the Adams-Bashforth correction
 //! of `u` over `dt_b'`. Every particle then drifts to the next step end:
-//! `x += dX' (ticks / 2^bin)`, `v += a dt`, `u += du dt`; inactive
-//! particles keep their density, accelerations and matrices (held fields)
-//! and get `P`, `c` of their drifted `u`. With one bin for all, this is
-//! the global run's arithmetic, bit for bit.
+//! `x += dX' (ticks / 2^bin)`, `v += a dt`, `u += du dt`, and density and
+//! smoothing length by the density's rate over the particle's last step
+//! (`rho *= exp(r dt)`, `h *= exp(-r dt / 3)`); inactive particles keep
+//! their accelerations and matrices (held fields) and get `P`, `c` of
+//! their drifted `u` and `rho`. Without the density prediction the held
+//! densities of inactive neighbours are an O(dt) error in the active
+//! particles' forces, and Sedov loses 1.4e-3 of its energy at 30^3.
 //!
 //! The limiter: a new bin is at most `limiter_delta` above the smallest
 //! bin among the particle's neighbours, and an active particle wakes the
@@ -563,10 +566,11 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             p.dz[r.clone()].par_iter(),
             p.u[r.clone()].par_iter_mut(),
             p.rho[r.clone()].par_iter_mut(),
+            p.h[r.clone()].par_iter_mut(),
         )
             .into_par_iter()
             .enumerate()
-            .map(|(k, (x, y, z, vx, vy, vz, dx, dy, dz, u, rho))| {
+            .map(|(k, (x, y, z, vx, vy, vz, dx, dy, dz, u, rho, h))| {
                 let i = o + k;
                 // An exact ratio of integers (a power of two below).
                 let share = ticks as f64 / bin_of(bins[i]).ticks() as f64;
@@ -599,7 +603,12 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                     *pos[c] = wrapped[c];
                 }
                 *u += du[i] * dt;
-                *rho *= (dlnrho[i] * dt).exp();
+                // Density by its rate, and h with it so that the kernel
+                // keeps its mass (h^3 rho constant).
+                if dlnrho[i] != 0.0 {
+                    *rho *= (dlnrho[i] * dt).exp();
+                    *h *= (-dlnrho[i] * dt / 3.0).exp();
+                }
                 Ok(moved)
             })
             .try_reduce(|| 0.0, |a, b| Ok(a.max(b)))?;
@@ -705,8 +714,12 @@ impl PairStage for WakeUp<'_> {
             .gt(F64s::splat(0.0))
             .select(s.1, F64s::splat(f64::INFINITY))
             .min_lane();
+        // An atomic operation only where the request lowers what is there.
         if ask.is_finite() {
-            self.wake[j].fetch_min(ask as u8, Ordering::Relaxed);
+            let ask = ask as u8;
+            if ask < self.wake[j].load(Ordering::Relaxed) {
+                self.wake[j].fetch_min(ask, Ordering::Relaxed);
+            }
         }
     }
 

@@ -173,6 +173,9 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         if let Some(sw) = self.config.scheme.switches() {
             p.enable_alpha(sw.alpha_min);
         }
+        if self.config.time_steps.on_time_line() && !p.fields().block {
+            p.enable_block_steps();
+        }
     }
 
     /// The scheme.
