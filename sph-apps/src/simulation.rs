@@ -50,6 +50,10 @@ pub struct Summary {
     /// `particle_updates / particles`: the global steps the run's work
     /// amounts to.
     pub full_step_equivalents: f64,
+    /// Domain syncs (migration, sort, halos, tree rebuild): every step of
+    /// a global run; under block steps only when particles have drifted
+    /// past the halos' margin.
+    pub domain_syncs: u64,
     /// Time reached.
     pub t_end: f64,
     /// Wall-clock seconds of the whole loop.
@@ -568,6 +572,7 @@ impl<C: Communicator> Simulation<C> {
             steps: self.hydro.steps(),
             particle_updates: self.hydro.particle_updates(),
             full_step_equivalents: self.hydro.particle_updates() as f64 / n.max(1) as f64,
+            domain_syncs: self.hydro.domain_syncs(),
             t_end: end.t,
             wall_s,
             mean_step_s,

@@ -25,8 +25,11 @@
 //! their step is cut to one of `2^(b' + delta)` ticks containing now,
 //! with the velocity they would have had at its start.
 //!
-//! Every sub-step syncs the domain (migration, halos) and rebuilds the
-//! tree; only the pair stages are restricted to the active particles.
+//! The domain syncs (migration, sort, halos, tree rebuild) on the first
+//! sub-step and whenever the largest h plus the largest drift since the
+//! last sync passes the halos' reach; in between, halos get their owners'
+//! state by a plain exchange and the tree is refitted to the drifted
+//! positions (same cells, exact boxes), so searches stay exact.
 
 use super::report::{DomainStepStats, Stage, StageClock};
 use super::{grow_open_axes, Hydro, StepReport};
@@ -55,6 +58,15 @@ pub(super) struct BlockState {
     pub(super) started: bool,
     /// Particle updates so far (active particles summed over sub-steps).
     pub(super) updates: u64,
+    /// Domain syncs so far (migration, sort, halos, tree rebuild).
+    pub(super) syncs: u64,
+    /// The most any particle can have moved since the last sync (the sum
+    /// of each sub-step's largest move, all ranks).
+    drift_since_sync: f64,
+    /// Whether the next sub-step syncs: when the largest h plus that
+    /// drift passes the halos' reach (`Domain::h_limit`), a pair of the
+    /// next sub-step might be missing from the halos or the tree's cells.
+    sync_due: bool,
     /// Work arrays: active flags of the owned particles, their new bins,
     /// the smallest neighbour bins, and the wake-up requests of every
     /// local particle.
@@ -100,6 +112,16 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         self.block.ti
     }
 
+    /// Domain syncs of a block-step run so far (a global run syncs every
+    /// step).
+    pub fn domain_syncs(&self) -> u64 {
+        if self.config.time_steps.on_time_line() {
+            self.block.syncs
+        } else {
+            self.step
+        }
+    }
+
     /// Particle updates so far: the active particles summed over the
     /// sub-steps of a block-step run, particles times steps in a global
     /// one.
@@ -127,15 +149,25 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             )));
         }
         let mut clock = StageClock::start();
-        self.release_step_buffers();
-        let owned = self.domain.sync_with(p, bbox, self.next_h_max.take())?;
-        clock.lap(Stage::Sync);
-        self.tree
-            .rebuild(self.domain.keys(), &p.x, &p.y, &p.z, self.config.bucket)?;
+        let first = !self.block.started;
+        let owned = if first || self.block.sync_due {
+            self.release_step_buffers();
+            let owned = self.domain.sync_with(p, bbox, self.next_h_max.take())?;
+            clock.lap(Stage::Sync);
+            self.tree
+                .rebuild(self.domain.keys(), &p.x, &p.y, &p.z, self.config.bucket)?;
+            self.block.drift_since_sync = 0.0;
+            self.block.syncs += 1;
+            owned
+        } else {
+            self.refresh_halos(p)?;
+            clock.lap(Stage::Halos);
+            self.tree.refit(&p.x, &p.y, &p.z)?;
+            self.domain.owned()
+        };
         clock.lap(Stage::Tree);
 
         let ti = self.block.ti;
-        let first = !self.block.started;
         let mut active = std::mem::take(&mut self.block.active);
         active.clear();
         active.extend(
@@ -224,6 +256,13 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         let mut times = comm_times;
         comm.all_reduce(&mut times, ReduceOp::Max);
         self.next_h_max = Some(ext[2]);
+        // Between syncs particles keep their halos and their tree cells
+        // (refitted): valid while every pair within 2 max(h_i, h_j) now
+        // was within 2 h_limit at the sync, i.e. h_max + drift <= h_limit.
+        // Global figures only, so every rank count syncs at the same
+        // sub-steps and sums in the same order.
+        self.block.drift_since_sync += reach;
+        self.block.sync_due = ext[2] + self.block.drift_since_sync > self.domain.h_limit();
 
         let t = self.t;
         let t_next = line.time(next);
@@ -262,6 +301,50 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             bins: None,
             updates: updates as u64,
         })
+    }
+
+    /// Brings the owners' current state to their halo copies (the halos
+    /// of the last sync), between syncs: every field a halo carries.
+    fn refresh_halos(&mut self, p: &mut Particles) -> Result<(), CoreError> {
+        if self.domain.comm().size() == 1 {
+            return Ok(());
+        }
+        let Particles {
+            x,
+            y,
+            z,
+            vx,
+            vy,
+            vz,
+            h,
+            u,
+            bin,
+            dlnrho,
+            rho,
+            p: pressure,
+            c,
+            ax,
+            ay,
+            az,
+            du,
+            omega,
+            iad,
+            ..
+        } = p;
+        let mut fields: Vec<&mut [f64]> = vec![
+            x, y, z, vx, vy, vz, h, u, bin, dlnrho, rho, pressure, c, ax, ay, az, du,
+        ]
+        .into_iter()
+        .map(|v| v.as_mut_slice())
+        .collect();
+        if !omega.is_empty() {
+            fields.push(omega);
+        }
+        for m in iad.iter_mut().filter(|m| !m.is_empty()) {
+            fields.push(m);
+        }
+        self.domain.exchange(&mut fields)?;
+        Ok(())
     }
 
     /// The new bins of the active particles (into `block.new_bin`, one per
