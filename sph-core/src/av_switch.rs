@@ -670,7 +670,17 @@ impl<K: Kernel, const IAD: bool> Indicator<'_, K, IAD> {
 /// applied (`alpha` advanced over `dt` per target).
 struct IndicatorStage<'a, K, const IAD: bool> {
     indicator: Indicator<'a, K, IAD>,
-    dt: f64,
+    dt: Elapsed<'a>,
+}
+
+/// The time over which alpha advances: one for all targets, or each
+/// particle's own (indexed like the particles; block time steps).
+#[derive(Debug, Clone, Copy)]
+pub enum Elapsed<'a> {
+    /// Every target the same time.
+    Uniform(f64),
+    /// `elapsed[i]` for target `i`.
+    PerParticle(&'a [f64]),
 }
 
 impl<K: Kernel, const IAD: bool> PairStage for IndicatorStage<'_, K, IAD> {
@@ -701,7 +711,11 @@ impl<K: Kernel, const IAD: bool> PairStage for IndicatorStage<'_, K, IAD> {
             let h = self.indicator.flow.h;
             for (l, a) in alpha.iter_mut().enumerate() {
                 let tau = p.decay_time(h[g.first + l], v_sig[l]);
-                *a = p.advance(*a, alpha_loc[l], tau, self.dt);
+                let dt = match self.dt {
+                    Elapsed::Uniform(dt) => dt,
+                    Elapsed::PerParticle(e) => e[g.first + l],
+                };
+                *a = p.advance(*a, alpha_loc[l], tau, dt);
             }
         }
     }
@@ -711,7 +725,7 @@ impl<K: Kernel, const IAD: bool> PairStage for IndicatorStage<'_, K, IAD> {
 /// advanced over `dt`.
 enum IndicatorOut<'a> {
     Indicator(&'a mut [f64], &'a mut [f64]),
-    Advance(&'a mut [f64], f64),
+    Advance(&'a mut [f64], Elapsed<'a>),
 }
 
 /// The arguments of one indicator pass, run for one gradient operator.
@@ -765,9 +779,10 @@ impl<K: Kernel> WithGradients for IndicatorRun<'_, K> {
         };
         let r = self.nl.targets();
         let (dt, out) = match self.out {
-            IndicatorOut::Indicator(al, vs) => {
-                (0.0, (Some([&mut al[r.clone()], &mut vs[r]]), None))
-            }
+            IndicatorOut::Indicator(al, vs) => (
+                Elapsed::Uniform(0.0),
+                (Some([&mut al[r.clone()], &mut vs[r]]), None),
+            ),
             IndicatorOut::Advance(alpha, dt) => (dt, (None, Some([&mut alpha[r]]))),
         };
         driver.run(&IndicatorStage { indicator, dt }, out);
@@ -832,7 +847,44 @@ pub fn update_alpha<K: Kernel>(
     nl: &CompactNeighborList,
     alpha: &mut [f64],
 ) {
+    update_alpha_over(
+        kernel,
+        bbox,
+        flow,
+        gradients,
+        div_v,
+        params,
+        Elapsed::Uniform(dt),
+        nl,
+        alpha,
+    );
+}
+
+/// [`update_alpha`] over the time `elapsed` gives: one for all, or each
+/// target's own since its last update (block time steps).
+///
+/// # Panics
+/// As [`update_alpha`], and if a per-particle `elapsed` does not cover
+/// the targets.
+#[allow(clippy::too_many_arguments)]
+pub fn update_alpha_over<K: Kernel>(
+    kernel: &K,
+    bbox: &BoundingBox,
+    flow: FlowState<'_>,
+    gradients: Gradients,
+    div_v: &[f64],
+    params: &AvSwitchParams,
+    elapsed: Elapsed<'_>,
+    nl: &CompactNeighborList,
+    alpha: &mut [f64],
+) {
     assert!(params.is_valid(), "invalid AV switch parameters {params:?}");
-    let out = IndicatorOut::Advance(alpha, dt);
+    if let Elapsed::PerParticle(e) = elapsed {
+        assert!(
+            e.len() >= nl.targets().end,
+            "elapsed times do not cover the targets"
+        );
+    }
+    let out = IndicatorOut::Advance(alpha, elapsed);
     IndicatorRun::new(kernel, bbox, flow, div_v, params, nl, out).with(gradients);
 }

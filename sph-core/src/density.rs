@@ -114,7 +114,7 @@ pub fn xmass<K: Kernel>(
     xm: &mut [f64],
 ) {
     density(kernel, bbox, pos, nl, xm, &mut []);
-    for i in nl.targets() {
+    for i in nl.served_targets() {
         xm[i] = pos.m[i] / xm[i];
     }
 }

@@ -74,6 +74,12 @@ pub enum Needs {
     ReferencedEos,
     /// Block (individual) time steps: the particle's time bin.
     BlockSteps,
+    /// Block time steps with viscosity switches: the velocity divergence
+    /// inactive neighbours hold.
+    BlockSwitches,
+    /// Block time steps with generalised or pressure-energy volumes: the
+    /// volume elements inactive neighbours hold.
+    BlockVolumes,
 }
 
 /// Which optional fields a run holds (one flag per [`Needs`] condition
@@ -95,6 +101,9 @@ pub struct FieldSet {
     /// Block time steps: the time bin, and the derived fields inactive
     /// particles hold ([`Kind::Held`]).
     pub block: bool,
+    /// Volume elements other than `m / rho` (generalised or
+    /// pressure-energy volumes): held fields under block time steps.
+    pub volumes: bool,
 }
 
 impl FieldSet {
@@ -106,6 +115,7 @@ impl FieldSet {
         alpha: false,
         eos_ref: false,
         block: false,
+        volumes: false,
     };
 }
 
@@ -119,6 +129,7 @@ impl Default for FieldSet {
             alpha: false,
             eos_ref: false,
             block: false,
+            volumes: false,
         }
     }
 }
@@ -134,6 +145,8 @@ impl FieldSet {
             Needs::Switches => self.alpha,
             Needs::ReferencedEos => self.eos_ref,
             Needs::BlockSteps => self.block,
+            Needs::BlockSwitches => self.block && self.alpha,
+            Needs::BlockVolumes => self.block && self.volumes,
         }
     }
 
@@ -146,6 +159,7 @@ impl FieldSet {
             alpha: self.alpha || other.alpha,
             eos_ref: self.eos_ref || other.eos_ref,
             block: self.block || other.block,
+            volumes: self.volumes || other.volumes,
         }
     }
 }
@@ -271,7 +285,9 @@ const fn kept_by_blocks(mut f: Field) -> Field {
 }
 
 use Kind::{History, Identity, Persistent};
-use Needs::{Always, BlockSteps, GradH, Gravity, Iad, ReferencedEos, Switches};
+use Needs::{
+    Always, BlockSteps, BlockSwitches, BlockVolumes, GradH, Gravity, Iad, ReferencedEos, Switches,
+};
 
 const DERIVED: Kind = Kind::Derived { fill: 0.0 };
 
@@ -345,6 +361,16 @@ pub struct Particles {
     /// steps, which predicts its density while it is inactive (empty in
     /// global runs).
     pub dlnrho: Vec<f64>,
+    /// Velocity divergence, held for inactive neighbours (block time
+    /// steps with viscosity switches; global runs keep it in the
+    /// pipeline's step buffers).
+    pub div_v: Vec<f64>,
+    /// Volume element `X` and its normalisation `k`, held for inactive
+    /// neighbours (block time steps with generalised or pressure-energy
+    /// volumes; global runs keep them in the step buffers).
+    pub xm: Vec<f64>,
+    /// The normalisation `k` of the volume elements (as `xm`).
+    pub kx: Vec<f64>,
     /// The optional fields held (on every rank alike, even one that holds
     /// no particles right now, so that messages agree).
     pub(crate) fields: FieldSet,
@@ -374,6 +400,9 @@ pub const FIELDS: &[Field] = &[
     doc(field!("p0", None, Persistent, ReferencedEos, F64, eos_ref[1]), "reference pressure of the referenced EOS"),
     doc(field!("bin", None, Persistent, BlockSteps, F64, bin), "time bin of the particle's step (block time steps)"),
     doc(field!("dlnrho", None, Persistent, BlockSteps, F64, dlnrho), "d ln rho / dt over the particle's last step (block time steps)"),
+    kept_by_blocks(doc(field!("div_v", None, DERIVED, BlockSwitches, F64, div_v), "velocity divergence (block time steps with switches)")),
+    kept_by_blocks(doc(field!("xm", None, DERIVED, BlockVolumes, F64, xm), "volume element X (block time steps, generalised volumes)")),
+    kept_by_blocks(doc(field!("kx", None, DERIVED, BlockVolumes, F64, kx), "volume normalisation k (block time steps, generalised volumes)")),
     kept_by_blocks(doc(field!("rho", Some(("Densities", 0)), DERIVED, Always, F64, rho), "density")),
     kept_by_blocks(doc(field!("p", Some(("Pressures", 0)), DERIVED, Always, F64, p), "pressure")),
     kept_by_blocks(doc(field!("c", Some(("SoundSpeeds", 0)), DERIVED, Always, F64, c), "sound speed")),
@@ -446,6 +475,7 @@ mod tests {
                 alpha: true,
                 eos_ref: true,
                 block: true,
+                volumes: true,
             },
         );
         for (k, f) in FIELDS.iter().enumerate() {

@@ -66,10 +66,18 @@ impl Particles {
     /// density rate, zero until its first step) and holds the derived
     /// fields inactive particles keep. Runs whose [`FieldSet`] comes from
     /// a block-step configuration hold them from the start.
-    pub fn enable_block_steps(&mut self) {
+    /// `volumes`: the scheme's volume elements are not `m / rho`, so `X`
+    /// and `k` are held too (as with viscosity switches `div v`).
+    pub fn enable_block_steps(&mut self, volumes: bool) {
+        let old = self.fields;
         self.fields.block = true;
-        self.bin = vec![0.0; self.len()];
-        self.dlnrho = vec![0.0; self.len()];
+        self.fields.volumes |= volumes;
+        let n = self.len();
+        for f in fields::held(self.fields).filter(|f| !old.holds(f.needs)) {
+            if let Column::F64(_, get) = f.column {
+                *get(self) = vec![arrival(f.kind); n];
+            }
+        }
     }
 
     /// Gives every particle the reference state of a referenced EOS,

@@ -410,6 +410,7 @@ impl Scheme {
             alpha: self.switches().is_some(),
             eos_ref: false,
             block: false,
+            volumes: self.volume != Volume::Mass,
         }
     }
 }

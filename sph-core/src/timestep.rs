@@ -87,7 +87,8 @@ impl crate::Choice for TimeSteps {
             }
             TimeSteps::Block => {
                 "Each particle its own power-of-two fraction of a longest step, with a limiter \
-                 (block time steps; ideal-gas hydro with constant viscosity only, for now)"
+                 (block time steps; for now without gravity, driving, pressure-energy volumes, \
+                 the Balsara limiter or viscosity cleaning)"
             }
             TimeSteps::Kdk => {
                 "The block-step integrator with every particle in the smallest bin any needs \

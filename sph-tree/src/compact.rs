@@ -54,6 +54,16 @@ impl CompactNeighborList {
         (!self.active.is_empty()).then_some(self.active.as_slice())
     }
 
+    /// The targets the lists serve, ascending: all of
+    /// [`targets`](Self::targets), or the flagged ones
+    /// ([`active_targets`](Self::active_targets)).
+    pub fn served_targets(&self) -> impl Iterator<Item = usize> + '_ {
+        let start = self.targets.start;
+        self.targets
+            .clone()
+            .filter(move |&i| self.active.is_empty() || self.active[i - start])
+    }
+
     /// Marks the lists as serving the flagged targets only (one flag per
     /// target; lists of
     /// [`find_compact_groups`](crate::NeighborSearch::find_compact_groups)

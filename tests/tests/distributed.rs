@@ -33,13 +33,15 @@ use std::time::{Duration, Instant};
 /// Particles per side and steps of each run: (case, side, steps). Every
 /// registered case runs (with [`DEFAULT_SIZE`] unless listed here), then
 /// the test-only `drift` case.
-const SIZES: [(&str, usize, u64); 8] = [
+const SIZES: [(&str, usize, u64); 9] = [
     ("sedov", 24, 20),
     // Its box is 0.25 across: 32 per unit length gives the kernel room.
     ("wind-shock", 32, 20),
     ("sedov-ve", 24, 20),
     // Block time steps: 30 sub-steps over bins 45-49 of a line to 0.05.
     ("sedov-block", 24, 30),
+    // Block steps with switches, volume elements and conduction (best).
+    ("sedov-best-block", 24, 30),
     ("square-patch", 20, 20),
     ("noh", 20, 20),
     ("drift", 16, 30),
@@ -49,13 +51,14 @@ const SIZES: [(&str, usize, u64); 8] = [
 const DEFAULT_SIZE: (usize, u64) = (16, 20);
 
 /// The runs: every registered case, then `drift`, `sedov-ve` and
-/// `sedov-block` (block time steps: wake-ups brought to their owners), with
+/// `sedov-block` and `sedov-best-block` (block time steps: wake-ups
+/// brought to their owners, halos refreshed between syncs), with
 /// their sizes (only those in `SPH_DISTRIBUTED_ONLY`, when set).
 fn runs() -> Vec<(&'static str, usize, u64)> {
     let only = std::env::var("SPH_DISTRIBUTED_ONLY").ok();
     cases::names()
         .into_iter()
-        .chain(["drift", "sedov-ve", "sedov-block"])
+        .chain(["drift", "sedov-ve", "sedov-block", "sedov-best-block"])
         .filter(|case| {
             only.as_ref()
                 .is_none_or(|o| o.split(',').any(|c| c == *case))
@@ -111,8 +114,11 @@ fn scene(case: &str) -> Scene {
         s.reference = None;
         return s;
     }
-    if case == "sedov-block" {
+    if case == "sedov-block" || case == "sedov-best-block" {
         let mut s = sph_validation::scene("sedov", side);
+        if case == "sedov-best-block" {
+            s.config.scheme = sph_core::Scheme::BEST;
+        }
         s.config.time_steps = sph_core::TimeSteps::Block;
         s.config.timestep.first_step = sph_core::timestep::FirstStep::Criteria;
         return s;

@@ -71,10 +71,20 @@ pub(super) struct BlockState {
     /// the smallest neighbour bins, and the wake-up requests of every
     /// local particle.
     active: Vec<bool>,
+    /// Each local particle's time since its last update (alpha's advance).
+    elapsed: Vec<f64>,
     rho_before: Vec<f64>,
     new_bin: Vec<u8>,
     neighbour_bin: Vec<f64>,
     wake: Vec<AtomicU8>,
+}
+
+impl BlockState {
+    /// Each local particle's time since its last update (its own step;
+    /// 0 at the first sub-step), for the viscosity switches.
+    pub(super) fn elapsed(&self) -> &[f64] {
+        &self.elapsed
+    }
 }
 
 /// A particle's bin, stored as an exact `f64` in `Particles::bin`.
@@ -180,6 +190,17 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         self.block.active = active;
         let neighbours = searched?;
         clock.lap(Stage::Neighbors);
+        // The held buffers of the scheme's stages (div v, X, k) come from
+        // the table for this sub-step and go back after it.
+        self.swap_held_buffers(p);
+        let elapsed = &mut self.block.elapsed;
+        elapsed.clear();
+        elapsed.resize(p.len(), 0.0);
+        if !first {
+            for i in owned.clone() {
+                elapsed[i] = line.dt(bin_of(p.bin[i]));
+            }
+        }
         let before = &mut self.block.rho_before;
         before.clear();
         before.extend_from_slice(&p.rho[owned.clone()]);
@@ -195,8 +216,11 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         clock.lap(Stage::Eos);
         self.exchange_thermo(p)?;
         clock.lap(Stage::Halos);
-        if self.config.scheme.gradients == crate::momentum::Gradients::Iad {
-            self.iad(p, bbox, step, false)?;
+        let scheme = self.config.scheme;
+        let iad = scheme.gradients == crate::momentum::Gradients::Iad;
+        let divergence_done = iad && scheme.needs_divergence();
+        if iad {
+            self.iad(p, bbox, step, divergence_done)?;
             clock.lap(Stage::Iad);
             let [c0, c1, c2, c3, c4, c5] = &mut p.iad;
             self.domain
@@ -205,8 +229,12 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         }
         self.buf
             .factors
-            .fill_with(&hydro_state!(p), self.config.scheme.volume, &self.buf.kx);
+            .fill_with(&hydro_state!(p), scheme.volume, &self.buf.kx);
+        if scheme.needs_divergence() {
+            self.switches(p, bbox, step, &mut clock, divergence_done)?;
+        }
         self.momentum(p, bbox);
+        self.swap_held_buffers(p);
         clock.lap(Stage::Momentum);
         if first {
             // Adams-Bashforth needs du_{n-1}; the first step uses du_0.
@@ -303,6 +331,14 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         })
     }
 
+    /// Swaps the held fields of the table (`div_v`, `xm`, `kx`, where the
+    /// scheme has them) with the step buffers the stages use.
+    fn swap_held_buffers(&mut self, p: &mut Particles) {
+        std::mem::swap(&mut self.buf.div_v, &mut p.div_v);
+        std::mem::swap(&mut self.buf.xm, &mut p.xm);
+        std::mem::swap(&mut self.buf.kx, &mut p.kx);
+    }
+
     /// Brings the owners' current state to their halo copies (the halos
     /// of the last sync), between syncs: every field a halo carries.
     fn refresh_halos(&mut self, p: &mut Particles) -> Result<(), CoreError> {
@@ -329,6 +365,10 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             du,
             omega,
             iad,
+            alpha,
+            div_v,
+            xm,
+            kx,
             ..
         } = p;
         let mut fields: Vec<&mut [f64]> = vec![
@@ -337,8 +377,10 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         .into_iter()
         .map(|v| v.as_mut_slice())
         .collect();
-        if !omega.is_empty() {
-            fields.push(omega);
+        for v in [omega, alpha, div_v, xm, kx] {
+            if !v.is_empty() {
+                fields.push(v);
+            }
         }
         for m in iad.iter_mut().filter(|m| !m.is_empty()) {
             fields.push(m);
@@ -695,6 +737,16 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 Ok(moved)
             })
             .try_reduce(|| 0.0, |a, b| Ok(a.max(b)))?;
+        // Volume elements X ~ m / rho0 go with the volume: X *= exp(-r dt)
+        // (their normalisation k stays).
+        if !p.xm.is_empty() {
+            let dlnrho = &p.dlnrho;
+            p.xm[owned.clone()]
+                .par_iter_mut()
+                .zip(dlnrho[owned].par_iter())
+                .filter(|(_, &r)| r != 0.0)
+                .for_each(|(x, &r)| *x *= (-r * dt).exp());
+        }
         Ok(self.domain.comm().all_reduce_scalar(moved, ReduceOp::Max))
     }
 }

@@ -127,10 +127,8 @@ impl HydroConfig {
             Some("self-gravity")
         } else if self.stirring.is_some() {
             Some("turbulence driving")
-        } else if s.volume != crate::Volume::Mass {
-            Some("generalised or pressure-energy volumes (--volume mass only)")
-        } else if s.switches().is_some() {
-            Some("viscosity switches (a constant alpha only)")
+        } else if s.volume == crate::Volume::PressureEnergy {
+            Some("pressure-energy volumes")
         } else if s.balsara {
             Some("the Balsara limiter")
         } else if s.av_cleaning {

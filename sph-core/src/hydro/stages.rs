@@ -3,7 +3,8 @@
 use super::report::{Stage, StageClock, BIN_OFFSETS};
 use super::Hydro;
 use crate::av_switch::{
-    balsara, iad_and_velocity_divergence, update_alpha, velocity_divergence, FlowState,
+    balsara, iad_and_velocity_divergence, update_alpha_over, velocity_divergence, Elapsed,
+    FlowState,
 };
 use crate::conduction::Conductivity;
 use crate::density::{density, pressure_energy_density, ve_density, xmass, Positions, VeOut};
@@ -122,9 +123,14 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         if let Some(sw) = scheme.switches() {
             self.domain.exchange(&mut [self.buf.div_v.as_mut_slice()])?;
             clock.lap(Stage::Halos);
-            let elapsed = if step == 1 { 0.0 } else { self.dt_prev };
+            // Each particle's own step under block time steps.
+            let elapsed = if self.config.time_steps.on_time_line() {
+                Elapsed::PerParticle(self.block.elapsed())
+            } else {
+                Elapsed::Uniform(if step == 1 { 0.0 } else { self.dt_prev })
+            };
             let flow = FlowState::from(hydro_state!(p));
-            update_alpha(
+            update_alpha_over(
                 kernel,
                 bbox,
                 flow,

@@ -121,10 +121,11 @@ pub(crate) struct RunArgs {
     /// How particles share time steps (default: global). `block` gives
     /// each particle its own power-of-two fraction of a longest step
     /// (`--dt-max`), with a limiter: a blast's cold gas then takes a few
-    /// long steps while the shock takes many short ones. For now `block`
-    /// covers ideal-gas hydro with a constant viscosity (schemes `paper`,
-    /// `std`), without gravity or driving; its outputs are written at the
-    /// sub-steps that reach them (`docs/block-timesteps.md`).
+    /// long steps while the shock takes many short ones. `kdk`: the same
+    /// integrator with every particle in the smallest bin. For now `block`
+    /// covers ideal-gas hydro without gravity or driving, pressure-energy
+    /// volumes, the Balsara limiter or viscosity cleaning; outputs are
+    /// written at the sub-steps that reach them (`docs/block-timesteps.md`).
     #[arg(long, value_parser = choice::<TimeSteps>())]
     pub(crate) time_steps: Option<TimeSteps>,
     /// Block time steps: the longest step a particle may take (default:
