@@ -69,6 +69,37 @@ pub fn velocity_now(displacement: f64, a: f64, dt_prev: f64) -> f64 {
     displacement / dt_prev + a * (0.5 * dt_prev)
 }
 
+/// Stores the new position `newp`, wrapped into `bbox`, in `pos`; an
+/// error names the particle when a coordinate or its velocity `vel` is not
+/// finite.
+#[inline]
+pub(crate) fn place(
+    pos: [&mut f64; 3],
+    newp: [f64; 3],
+    vel: [f64; 3],
+    bbox: &BoundingBox,
+    step: u64,
+    id: u64,
+) -> Result<(), CoreError> {
+    let wrapped = bbox.wrap(newp);
+    for (k, p) in pos.into_iter().enumerate() {
+        if !wrapped[k].is_finite() || !vel[k].is_finite() {
+            return Err(CoreError::NonFinite {
+                step,
+                id,
+                field: ["x", "y", "z"][k],
+                value: if wrapped[k].is_finite() {
+                    vel[k]
+                } else {
+                    wrapped[k]
+                },
+            });
+        }
+        *p = wrapped[k];
+    }
+    Ok(())
+}
+
 /// Advances the particles of `range` by `dt` (the previous step was `dt_prev`), wraps
 /// positions into periodic boxes and updates h (when `h_update` is given)
 /// from the neighbour counts `p.nc`. With `energy_guard`, a negative
@@ -115,22 +146,7 @@ pub fn integrate(
                 *dpos[k] = step_k;
                 *vel[k] = v_n + a[k] * dt;
             }
-            let wrapped = bbox.wrap(newp);
-            for k in 0..3 {
-                if !wrapped[k].is_finite() || !vel[k].is_finite() {
-                    return Err(CoreError::NonFinite {
-                        step,
-                        id: id[i],
-                        field: ["x", "y", "z"][k],
-                        value: if wrapped[k].is_finite() {
-                            *vel[k]
-                        } else {
-                            wrapped[k]
-                        },
-                    });
-                }
-                *pos[k] = wrapped[k];
-            }
+            place(pos, newp, [*vel[0], *vel[1], *vel[2]], bbox, step, id[i])?;
             // Adams-Bashforth 2; first order if that would go negative.
             let d = du[i];
             let mut fallback = 0;

@@ -34,8 +34,6 @@
 use super::report::{DomainStepStats, Stage, StageClock};
 use super::{grow_open_axes, Hydro, StepReport};
 use crate::conserved::Conserved;
-use crate::density::Positions;
-use crate::momentum::HydroState;
 use crate::pair_loop::{neighbour_lanes, F64s, Group, PairLoop, PairStage};
 use crate::timeline::{is_active, step_begin, Bin, Ticks, TimeLine, LINE, MAX_BIN};
 use crate::timestep::{DtLimit, TimeSteps};
@@ -207,35 +205,10 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         self.density(p, bbox)?;
         self.density_rates(p, &line, owned.clone(), first);
         clock.lap(Stage::Density);
-        // Every owned particle: the active ones from their new density,
-        // the others from their held density and drifted u.
-        self.eos(p, owned.clone())?;
-        if step == 1 {
-            self.calibrate_energy(p, owned.clone());
-        }
-        clock.lap(Stage::Eos);
-        self.exchange_thermo(p)?;
-        clock.lap(Stage::Halos);
-        let scheme = self.config.scheme;
-        let iad = scheme.gradients == crate::momentum::Gradients::Iad;
-        let divergence_done = iad && scheme.needs_divergence();
-        if iad {
-            self.iad(p, bbox, step, divergence_done)?;
-            clock.lap(Stage::Iad);
-            let [c0, c1, c2, c3, c4, c5] = &mut p.iad;
-            self.domain
-                .exchange(&mut [c0, c1, c2, c3, c4, c5].map(|c| c.as_mut_slice()))?;
-            clock.lap(Stage::Halos);
-        }
-        self.buf
-            .factors
-            .fill_with(&hydro_state!(p), scheme.volume, &self.buf.kx);
-        if scheme.needs_divergence() {
-            self.switches(p, bbox, step, &mut clock, divergence_done)?;
-        }
-        self.momentum(p, bbox);
+        // The EOS covers every owned particle: the active ones from their
+        // new density, the others from their predicted density and u.
+        self.thermo_and_forces(p, bbox, owned.clone(), step, &mut clock)?;
         self.swap_held_buffers(p);
-        clock.lap(Stage::Momentum);
         if first {
             // Adams-Bashforth needs du_{n-1}; the first step uses du_0.
             p.du_prev[owned.clone()].copy_from_slice(&p.du[owned.clone()]);
@@ -711,22 +684,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                     moved = moved.max(s.abs());
                     *vel[c] += a[c] * dt;
                 }
-                let wrapped = bbox.wrap(newp);
-                for c in 0..3 {
-                    if !wrapped[c].is_finite() || !vel[c].is_finite() {
-                        return Err(CoreError::NonFinite {
-                            step,
-                            id: id[i],
-                            field: ["x", "y", "z"][c],
-                            value: if wrapped[c].is_finite() {
-                                *vel[c]
-                            } else {
-                                wrapped[c]
-                            },
-                        });
-                    }
-                    *pos[c] = wrapped[c];
-                }
+                crate::integrate::place(pos, newp, [*vel[0], *vel[1], *vel[2]], bbox, step, id[i])?;
                 *u += du[i] * dt;
                 // Density by its rate, and h with it so that the kernel
                 // keeps its mass (h^3 rho constant).
@@ -734,7 +692,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                     *rho *= (dlnrho[i] * dt).exp();
                     *h *= (-dlnrho[i] * dt / 3.0).exp();
                 }
-                Ok(moved)
+                Ok::<f64, CoreError>(moved)
             })
             .try_reduce(|| 0.0, |a, b| Ok(a.max(b)))?;
         // Volume elements X ~ m / rho0 go with the volume: X *= exp(-r dt)

@@ -277,33 +277,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         clock.lap(Stage::Neighbors);
         self.density(p, bbox)?;
         clock.lap(Stage::Density);
-        self.eos(p, owned.clone())?;
-        if step == 1 {
-            self.calibrate_energy(p, owned.clone());
-        }
-        clock.lap(Stage::Eos);
-        self.exchange_thermo(p)?;
-        clock.lap(Stage::Halos);
-        // With IAD gradients the velocity divergence the switches need is
-        // summed in the IAD pass (one kernel evaluation per pair).
-        let divergence_done =
-            self.config.scheme.gradients == Gradients::Iad && self.config.scheme.needs_divergence();
-        if self.config.scheme.gradients == Gradients::Iad {
-            self.iad(p, bbox, step, divergence_done)?;
-            clock.lap(Stage::Iad);
-            let [c0, c1, c2, c3, c4, c5] = &mut p.iad;
-            self.domain
-                .exchange(&mut [c0, c1, c2, c3, c4, c5].map(|c| c.as_mut_slice()))?;
-            clock.lap(Stage::Halos);
-        }
-        self.buf
-            .factors
-            .fill_with(&hydro_state!(p), self.config.scheme.volume, &self.buf.kx);
-        if self.config.scheme.needs_divergence() {
-            self.switches(p, bbox, step, &mut clock, divergence_done)?;
-        }
-        let forces = self.momentum(p, bbox);
-        clock.lap(Stage::Momentum);
+        let forces = self.thermo_and_forces(p, bbox, owned.clone(), step, &mut clock)?;
         if step == 1 {
             // Adams-Bashforth needs du_{n-1}; the first step uses du_0.
             p.du_prev[owned.clone()].copy_from_slice(&p.du[owned.clone()]);
@@ -438,6 +412,48 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             bins,
             updates: updates as u64,
         })
+    }
+
+    /// From new densities to forces, the stages both time-step modes
+    /// share: EOS (with the barotropic calibration on step 1), halo
+    /// thermodynamics, IAD matrices (and the velocity divergence with
+    /// them), pair factors, viscosity switches, momentum and energy.
+    fn thermo_and_forces(
+        &mut self,
+        p: &mut Particles,
+        bbox: &BoundingBox,
+        owned: Range<usize>,
+        step: u64,
+        clock: &mut StageClock,
+    ) -> Result<MomentumStats, CoreError> {
+        self.eos(p, owned.clone())?;
+        if step == 1 {
+            self.calibrate_energy(p, owned.clone());
+        }
+        clock.lap(Stage::Eos);
+        self.exchange_thermo(p)?;
+        clock.lap(Stage::Halos);
+        // With IAD gradients the velocity divergence the switches need is
+        // summed in the IAD pass (one kernel evaluation per pair).
+        let divergence_done =
+            self.config.scheme.gradients == Gradients::Iad && self.config.scheme.needs_divergence();
+        if self.config.scheme.gradients == Gradients::Iad {
+            self.iad(p, bbox, step, divergence_done)?;
+            clock.lap(Stage::Iad);
+            let [c0, c1, c2, c3, c4, c5] = &mut p.iad;
+            self.domain
+                .exchange(&mut [c0, c1, c2, c3, c4, c5].map(|c| c.as_mut_slice()))?;
+            clock.lap(Stage::Halos);
+        }
+        self.buf
+            .factors
+            .fill_with(&hydro_state!(p), self.config.scheme.volume, &self.buf.kx);
+        if self.config.scheme.needs_divergence() {
+            self.switches(p, bbox, step, clock, divergence_done)?;
+        }
+        let forces = self.momentum(p, bbox);
+        clock.lap(Stage::Momentum);
+        Ok(forces)
     }
 
     /// Recomputes neighbours, density, pressure (and the gravitational
