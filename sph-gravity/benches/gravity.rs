@@ -1,12 +1,15 @@
 //! Tree gravity on Plummer spheres (1e5 and 1e6 particles, theta 0.5,
-//! quadrupoles) and the direct sum on 1e4 particles for comparison.
-//! The interaction counts of each tree evaluation are printed once.
+//! quadrupoles), the evaluation for a share of active targets on a
+//! drifted tree (block time steps: 1%, 10%, 100% of 1e5), and the direct
+//! sum on 1e4 particles for comparison. The interaction counts of each
+//! tree evaluation are printed once.
 
 #[path = "../tests/common/mod.rs"]
 mod common;
 
 use criterion::{criterion_main, BenchmarkId, Criterion};
-use sph_gravity::{direct, GravityField, GravityParams, TreeGravity};
+use sph_gravity::{direct, GravityField, GravityParams, Targets, TreeGravity};
+use sph_tree::{compute_keys, BoundingBox, Curve, KeySorter, Octree};
 use std::time::{Duration, Instant};
 
 fn tree_gravity(c: &mut Criterion) {
@@ -44,6 +47,52 @@ fn tree_gravity(c: &mut Criterion) {
     group.finish();
 }
 
+/// Active targets (every k-th particle along the curve) on a tree whose
+/// cells are 0.001 of a Plummer radius out of date.
+fn active_targets(c: &mut Criterion) {
+    let mut group = c.benchmark_group("tree_gravity_active_targets_1e5");
+    group.sample_size(10);
+    let cloud = common::plummer(100_000, 10.0, 42);
+    let bbox = BoundingBox::enclosing(&cloud.x, &cloud.y, &cloud.z).unwrap();
+    let mut keys = Vec::new();
+    compute_keys(
+        &bbox,
+        Curve::Hilbert,
+        &cloud.x,
+        &cloud.y,
+        &cloud.z,
+        &mut keys,
+    );
+    let mut perm = Vec::new();
+    KeySorter::new().sort(&keys, None, &mut perm);
+    let pick = |a: &[f64]| perm.iter().map(|&k| a[k as usize]).collect::<Vec<f64>>();
+    let (x, y, z, m) = (
+        pick(&cloud.x),
+        pick(&cloud.y),
+        pick(&cloud.z),
+        pick(&cloud.m),
+    );
+    let keys: Vec<u64> = perm.iter().map(|&k| keys[k as usize]).collect();
+    let tree = Octree::build(&keys, &x, &y, &z, 16).unwrap();
+    let mut solver = TreeGravity::new(GravityParams::default()).unwrap();
+    let mut out = GravityField::new();
+    for every in [100usize, 10, 1] {
+        let active: Vec<bool> = (0..x.len()).map(|i| i % every == 0).collect();
+        let targets = Targets {
+            active: Some(&active),
+            drift: 1e-3,
+        };
+        group.bench_function(BenchmarkId::from_parameter(format!("1/{every}")), |b| {
+            b.iter(|| {
+                solver
+                    .compute_targets(&tree, &bbox, &x, &y, &z, &m, None, targets, &mut out)
+                    .unwrap()
+            })
+        });
+    }
+    group.finish();
+}
+
 fn direct_sum(c: &mut Criterion) {
     let mut group = c.benchmark_group("direct_sum_plummer");
     group.sample_size(10);
@@ -60,6 +109,11 @@ fn direct_sum(c: &mut Criterion) {
 /// The benchmark group: `criterion_group!` defines a `pub fn` without docs, which
 /// a private module keeps out of the public items that `missing_docs` checks.
 mod group {
-    criterion::criterion_group!(benches, super::tree_gravity, super::direct_sum);
+    criterion::criterion_group!(
+        benches,
+        super::tree_gravity,
+        super::active_targets,
+        super::direct_sum
+    );
 }
 criterion_main!(group::benches);

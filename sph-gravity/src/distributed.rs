@@ -16,8 +16,8 @@
 
 use crate::multipole::Multipole;
 use crate::pair::softened_p2p;
-use crate::traversal::{dist2_point_box, mac_radius, max_of};
-use crate::{GravityError, GravityField, GravityParams, GravityStats, TreeGravity};
+use crate::traversal::{check_targets, dist2_point_box, mac_radius, max_of};
+use crate::{GravityError, GravityField, GravityParams, GravityStats, Targets, TreeGravity};
 use rayon::prelude::*;
 use sph_comm::Communicator;
 use sph_tree::{BoundingBox, Curve, NodeId, Octree, CELLS_PER_AXIS, MAX_LEVEL};
@@ -63,9 +63,11 @@ impl DistributedGravity {
         self.local.params()
     }
 
-    /// Field of all ranks' particles on this rank's particles, which are
-    /// sorted along the curve and held by `tree` (built over them alone).
-    /// Collective: every rank of `comm` calls it.
+    /// Field of all ranks' particles on this rank's `targets` (see
+    /// [`Targets`]: all, on a tree of the current positions, for a plain
+    /// evaluation), which are sorted along the curve and held by `tree`
+    /// (built over them alone, from the keys of `dec`). Collective: every
+    /// rank of `comm` calls it, with the same drift bound.
     #[allow(clippy::too_many_arguments)]
     pub fn compute<C: Communicator>(
         &mut self,
@@ -77,6 +79,7 @@ impl DistributedGravity {
         z: &[f64],
         m: &[f64],
         h: Option<&[f64]>,
+        targets: Targets<'_>,
         out: &mut GravityField,
     ) -> Result<GravityStats, GravityError> {
         if dec.key_start.len() != comm.size() + 1 {
@@ -85,7 +88,10 @@ impl DistributedGravity {
                 ranks: comm.size(),
             });
         }
-        let mut stats = self.local.compute(tree, dec.bbox, x, y, z, m, h, out)?;
+        check_targets(&targets, x.len())?;
+        let mut stats = self
+            .local
+            .compute_targets(tree, dec.bbox, x, y, z, m, h, targets, out)?;
         if comm.size() == 1 {
             return Ok(stats);
         }
@@ -112,9 +118,18 @@ impl DistributedGravity {
             tree.traverse(
                 |node| {
                     let mp = &mps[node as usize];
-                    let mac = mac_radius(tree, node, mp.com, dec.bbox, 1.0 / params.theta);
+                    let mac = mac_radius(
+                        tree,
+                        node,
+                        mp.com,
+                        dec.bbox,
+                        1.0 / params.theta,
+                        targets.drift > 0.0,
+                    );
                     let soft = params.softening * (self.hmax[node as usize] + dec.h_max);
-                    let reach = mac.max(soft);
+                    // The receiver's particles lie within the drift of
+                    // its cells.
+                    let reach = mac.max(soft) + targets.drift;
                     let far = cells
                         .iter()
                         .all(|&(lo, hi)| dist2_point_box(mp.com, lo, hi) > reach * reach);
@@ -162,6 +177,7 @@ impl DistributedGravity {
         (ax, ay, az, phi)
             .into_par_iter()
             .enumerate()
+            .filter(|(i, _)| targets.is_active(*i))
             .for_each(|(i, (ax, ay, az, phi))| {
                 let pi = [x[i], y[i], z[i]];
                 let hi = h.map_or(0.0, |h| h[i]);
@@ -187,8 +203,9 @@ impl DistributedGravity {
                 *az += g * a[2];
                 *phi += g * s;
             });
-        stats.m2p += (remote_mp.len() * x.len()) as u64;
-        stats.p2p += (remote_p.len() * x.len()) as u64;
+        let evaluated = targets.count(x.len());
+        stats.m2p += (remote_mp.len() * evaluated) as u64;
+        stats.p2p += (remote_p.len() * evaluated) as u64;
         Ok(stats)
     }
 }

@@ -62,6 +62,18 @@ pub enum GravityError {
         /// Particles given to the evaluation.
         particles: usize,
     },
+    /// Target flags ([`Targets`](crate::Targets)) for another number of
+    /// particles than given.
+    #[error("{flags} target flags were given for {particles} particles")]
+    TargetMismatch {
+        /// Flags given.
+        flags: usize,
+        /// Particles given to the evaluation.
+        particles: usize,
+    },
+    /// A drift bound that is negative or not finite.
+    #[error("drift bound {0} must be a finite number >= 0")]
+    InvalidDrift(f64),
     /// A softening scale that is negative or not finite.
     #[error("softening scale {0} must be a finite number >= 0")]
     InvalidSoftening(f64),

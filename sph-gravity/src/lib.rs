@@ -100,6 +100,55 @@ pub use error::GravityError;
 pub use multipole::{ExpansionOrder, Multipole, Multipoles};
 pub use traversal::TreeGravity;
 
+/// Which target particles an evaluation writes, and how far any particle
+/// may have moved since the tree's cells (its keys) were made.
+///
+/// Codes with individual time steps evaluate gravity only on the
+/// particles that start a new step, on a tree whose cells stay those of
+/// the last rebuild while the particles drift (its boxes refitted to the
+/// current positions). With a drift, a node's size in the opening
+/// criterion is that of the cube about its geometric cell's centre
+/// holding the cell and the node's tight box (its own particles' drift,
+/// not the largest anywhere), and a distributed evaluation demands
+/// `drift` more distance from the receiver's domain. Groups with no
+/// active target are skipped and their outputs left as they were.
+///
+/// ```
+/// use sph_gravity::Targets;
+/// let all = Targets::ALL;
+/// assert!(all.active.is_none() && all.drift == 0.0);
+/// let flags = [true, false, false];
+/// let some = Targets { active: Some(&flags), drift: 1e-3 };
+/// assert_eq!(some.count(3), 1);
+/// ```
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Targets<'a> {
+    /// One flag per particle (in the tree's order); `None`: all.
+    pub active: Option<&'a [bool]>,
+    /// The largest distance any particle has moved since the keys were
+    /// computed (`>= 0`, finite).
+    pub drift: f64,
+}
+
+impl Targets<'_> {
+    /// Every particle, on a tree built at the current positions.
+    pub const ALL: Targets<'static> = Targets {
+        active: None,
+        drift: 0.0,
+    };
+
+    /// Whether particle `i` is a target.
+    #[inline]
+    pub fn is_active(&self, i: usize) -> bool {
+        self.active.is_none_or(|a| a[i])
+    }
+
+    /// The number of targets among `n` particles.
+    pub fn count(&self, n: usize) -> usize {
+        self.active.map_or(n, |a| a.iter().filter(|&&b| b).count())
+    }
+}
+
 use rayon::prelude::*;
 
 /// Parameters of the tree evaluation.

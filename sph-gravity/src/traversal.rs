@@ -3,7 +3,7 @@
 
 use crate::multipole::{m2p_point, upward, ExpansionOrder, Multipole, Multipoles};
 use crate::pair::softened_p2p;
-use crate::{validate, GravityError, GravityField, GravityParams, GravityStats};
+use crate::{validate, GravityError, GravityField, GravityParams, GravityStats, Targets};
 use rayon::prelude::*;
 use sph_tree::{apply_permutation, compute_keys, BoundingBox, Curve, KeySorter, NodeId, Octree};
 use std::ops::Range;
@@ -131,6 +131,29 @@ impl TreeGravity {
         h: Option<&[f64]>,
         out: &mut GravityField,
     ) -> Result<GravityStats, GravityError> {
+        self.compute_targets(tree, bbox, x, y, z, m, h, Targets::ALL, out)
+    }
+
+    /// [`compute`](Self::compute) for the `targets` only, on a tree whose
+    /// cells may be older than the positions (see [`Targets`]): the
+    /// target groups with an active particle are evaluated whole (so a
+    /// particle's field does not depend on which group mates are active)
+    /// and written; the other groups' entries of `out` are left as they
+    /// were (`out` keeps its contents when its length is `x.len()`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn compute_targets(
+        &mut self,
+        tree: &Octree,
+        bbox: &BoundingBox,
+        x: &[f64],
+        y: &[f64],
+        z: &[f64],
+        m: &[f64],
+        h: Option<&[f64]>,
+        targets: Targets<'_>,
+        out: &mut GravityField,
+    ) -> Result<GravityStats, GravityError> {
+        check_targets(&targets, x.len())?;
         if let Some(axis) = (0..3).find(|&a| bbox.is_periodic(a)) {
             return Err(GravityError::PeriodicBox { axis });
         }
@@ -142,7 +165,9 @@ impl TreeGravity {
             });
         }
         let h = scale_softening(self.params.softening, h, &mut self.scaled_h);
-        Ok(self.eval.run(&self.params, tree, bbox, x, y, z, m, h, out))
+        Ok(self
+            .eval
+            .run(&self.params, tree, bbox, x, y, z, m, h, targets, out))
     }
 
     /// Evaluates gravity on particles in any order (no box needed: the
@@ -196,6 +221,7 @@ impl TreeGravity {
             &s.z,
             &s.m,
             hs,
+            Targets::ALL,
             &mut s.field,
         );
         // Back to the caller's order through the inverse permutation (a
@@ -221,15 +247,36 @@ impl TreeGravity {
     }
 }
 
+/// Target flags of the right length and a usable drift bound.
+pub(crate) fn check_targets(targets: &Targets<'_>, n: usize) -> Result<(), GravityError> {
+    if let Some(a) = targets.active {
+        if a.len() != n {
+            return Err(GravityError::TargetMismatch {
+                flags: a.len(),
+                particles: n,
+            });
+        }
+    }
+    if !(targets.drift >= 0.0 && targets.drift.is_finite()) {
+        return Err(GravityError::InvalidDrift(targets.drift));
+    }
+    Ok(())
+}
+
 /// The vector-MAC radius `l / theta + s` of a node: `l` the size of its
 /// geometric SFC cell (the level's cell holding the centre of its tight
 /// box), `s` the distance from that cell's centre to the expansion centre.
+/// When the particles have `drifted` since the keys were computed, `l` is
+/// the side of the smallest cube about the cell's centre that holds both
+/// the cell and the node's (refitted) tight box: the bound the cell gave
+/// on where the node's particles lie, made good again.
 pub(crate) fn mac_radius(
     tree: &Octree,
     node: NodeId,
     com: [f64; 3],
     bbox: &BoundingBox,
     inv_theta: f64,
+    drifted: bool,
 ) -> f64 {
     let (blo, blen) = (bbox.lo(), bbox.lengths());
     let (lo, hi) = tree.node_box(node);
@@ -242,6 +289,9 @@ pub(crate) fn mac_radius(
         let idx = ((mid - blo[d]) / size).floor().clamp(0.0, cells - 1.0);
         let centre = blo[d] + (idx + 0.5) * size;
         l = l.max(size);
+        if drifted {
+            l = l.max(2.0 * (lo[d] - centre).abs().max((hi[d] - centre).abs()));
+        }
         let off = com[d] - centre;
         s2 += off * off;
     }
@@ -291,6 +341,7 @@ struct Lists {
 impl Evaluator {
     /// Upward pass, opening radii, then the parallel loop over groups.
     /// Inputs are validated by the caller.
+    #[allow(clippy::too_many_arguments)]
     fn run(
         &mut self,
         params: &GravityParams,
@@ -301,6 +352,7 @@ impl Evaluator {
         z: &[f64],
         m: &[f64],
         h: Option<&[f64]>,
+        targets: Targets<'_>,
         out: &mut GravityField,
     ) -> GravityStats {
         let n = x.len();
@@ -328,7 +380,7 @@ impl Evaluator {
         self.crit.resize(tree.num_nodes(), NodeCrit::default());
         self.crit.par_iter_mut().enumerate().for_each(|(k, c)| {
             let com = mps[k].com;
-            let mac = mac_radius(tree, k as NodeId, com, bbox, inv_theta);
+            let mac = mac_radius(tree, k as NodeId, com, bbox, inv_theta, targets.drift > 0.0);
             *c = NodeCrit {
                 com,
                 mac2: mac * mac,
@@ -361,6 +413,9 @@ impl Evaluator {
             .map_init(Lists::default, |lists, (gi, (ax, ay, az, phi))| {
                 let start = gi * gs;
                 let range = start..start + ax.len();
+                if !range.clone().any(|i| targets.is_active(i)) {
+                    return GravityStats::default();
+                }
                 let st = ctx.group(range, lists, ax, ay, az, phi);
                 for v in [ax, ay, az, phi] {
                     for a in v.iter_mut() {

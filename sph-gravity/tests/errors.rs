@@ -3,7 +3,7 @@
 use sph_comm::{CommError, SerialComm};
 use sph_gravity::{
     compute_gravity, direct, Decomposition, DistributedGravity, GravityError, GravityField,
-    GravityParams, TreeGravity,
+    GravityParams, Targets, TreeGravity,
 };
 use sph_tree::{Boundary, BoundingBox, Curve, Octree, TreeError};
 
@@ -167,6 +167,7 @@ fn decomposition_with_wrong_bound_count() {
             &x,
             &[1.0; 3],
             None,
+            Targets::ALL,
             &mut out,
         )
         .unwrap_err();
@@ -189,4 +190,38 @@ fn communication_errors_keep_the_comm_error() {
     let e = GravityError::from(inner.clone());
     assert_eq!(e, GravityError::Communication(inner.clone()));
     assert_eq!(e.to_string(), inner.to_string());
+}
+
+#[test]
+fn targets_of_the_wrong_length_or_a_bad_drift() {
+    let x = [0.1, 0.5, 0.9];
+    let keys = [1u64 << 10, 1 << 20, 1 << 30];
+    let tree = Octree::build(&keys, &x, &x, &x, 1).unwrap();
+    let bbox = BoundingBox::cube(0.0, 1.0, Boundary::Open).unwrap();
+    let mut solver = TreeGravity::new(GravityParams::default()).unwrap();
+    let mut out = GravityField::new();
+    let mut run = |t: Targets<'_>| {
+        solver
+            .compute_targets(&tree, &bbox, &x, &x, &x, &[1.0; 3], None, t, &mut out)
+            .unwrap_err()
+    };
+    let two = [true, false];
+    assert_eq!(
+        run(Targets {
+            active: Some(&two),
+            drift: 0.0
+        }),
+        GravityError::TargetMismatch {
+            flags: 2,
+            particles: 3
+        }
+    );
+    for bad in [-1e-3, f64::NAN, f64::INFINITY] {
+        let e = run(Targets {
+            active: None,
+            drift: bad,
+        });
+        assert!(matches!(e, GravityError::InvalidDrift(_)), "{e}");
+        assert!(e.to_string().contains("drift bound"), "{e}");
+    }
 }

@@ -6,7 +6,9 @@ mod common;
 
 use common::Rng;
 use proptest::prelude::*;
-use sph_gravity::{compute_gravity, direct, GravityField, GravityParams, Multipoles, TreeGravity};
+use sph_gravity::{
+    compute_gravity, direct, GravityField, GravityParams, Multipoles, Targets, TreeGravity,
+};
 use sph_tree::{apply_permutation, compute_keys, Boundary, BoundingBox, Curve, KeySorter, Octree};
 
 /// Sorted particle arrays with a tree over them.
@@ -54,6 +56,43 @@ fn norm(a: [f64; 3]) -> f64 {
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(48))]
+
+    /// An evaluation for some targets writes exactly the groups holding
+    /// one (with the bits of a full evaluation) and leaves the others'
+    /// entries as they were.
+    #[test]
+    fn target_groups_equal_the_full_evaluation(
+        n in 1usize..500,
+        group in 1usize..40,
+        seed in any::<u64>(),
+        every in 1usize..200,
+    ) {
+        let (x, y, z, m) = random_cloud(n, seed);
+        let bbox = BoundingBox::enclosing(&x, &y, &z).unwrap();
+        let s = sort_and_build(&bbox, x, y, z, m, 8);
+        let params = GravityParams { group_size: group, ..GravityParams::default() };
+        let mut solver = TreeGravity::new(params).unwrap();
+        let mut full = GravityField::new();
+        solver.compute(&s.tree, &bbox, &s.x, &s.y, &s.z, &s.m, None, &mut full).unwrap();
+        let active: Vec<bool> = (0..n).map(|i| (i * 7919 + seed as usize % 97).is_multiple_of(every)).collect();
+        let mut out = GravityField::new();
+        out.resize(n);
+        out.phi.fill(f64::NAN);
+        let targets = Targets { active: Some(&active), drift: 0.0 };
+        solver
+            .compute_targets(&s.tree, &bbox, &s.x, &s.y, &s.z, &s.m, None, targets, &mut out)
+            .unwrap();
+        for i in 0..n {
+            let g = i / group;
+            let written = active[g * group..((g + 1) * group).min(n)].iter().any(|&a| a);
+            if written {
+                prop_assert_eq!(out.phi[i].to_bits(), full.phi[i].to_bits());
+                prop_assert_eq!(out.acc(i).map(f64::to_bits), full.acc(i).map(f64::to_bits));
+            } else {
+                prop_assert!(out.phi[i].is_nan(), "particle {} of an inactive group written", i);
+            }
+        }
+    }
 
     /// Every node's mass and centre of mass equal the direct sums over its
     /// particles, and the root quadrupole (after all M2M shifts) equals

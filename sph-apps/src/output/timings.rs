@@ -20,7 +20,7 @@ impl TimingsCsv {
     pub fn create(path: &Path) -> Result<Self, AppError> {
         let mut f = CsvFile::create(path)?;
         f.line(&format!(
-            "step,{},total,owned_min,owned_max,halo_ratio,halo_ratio_max,bytes_sent,comm_s_max,sync_s_max,dt_limit",
+            "step,{},total,owned_min,owned_max,halo_ratio,halo_ratio_max,bytes_sent,comm_s_max,sync_s_max,updates,dt_limit",
             STAGES.join(",")
         ))?;
         Ok(Self(f))
@@ -31,7 +31,7 @@ impl TimingsCsv {
         let times: Vec<String> = r.times.0.iter().map(|s| format!("{s:.6e}")).collect();
         let d = r.domain;
         self.0.line_fmt(format_args!(
-            "{},{},{:.6e},{},{},{:.6e},{:.6e},{},{:.6e},{:.6e},{}",
+            "{},{},{:.6e},{},{},{:.6e},{:.6e},{},{:.6e},{:.6e},{},{}",
             r.step,
             times.join(","),
             r.times.total(),
@@ -42,6 +42,7 @@ impl TimingsCsv {
             d.bytes_sent,
             d.comm_seconds_max,
             d.sync_seconds_max,
+            r.updates,
             r.dt_limit.name()
         ))
     }
@@ -63,7 +64,7 @@ impl TimingsCsv {
             .collect();
         let dom = totals.domain();
         self.0.line_fmt(format_args!(
-            "mean_2..N,{},{:.6e},{},{},{:.6e},{:.6e},{:.0},{:.6e},{:.6e}",
+            "mean_2..N,{},{:.6e},{},{},{:.6e},{:.6e},{:.0},{:.6e},{:.6e},{:.1}",
             means.join(","),
             totals.mean_step_s(),
             dom.owned_min,
@@ -72,7 +73,8 @@ impl TimingsCsv {
             dom.halo_ratio_max,
             dom.bytes_sent_per_step,
             dom.comm_seconds_per_step,
-            dom.sync_seconds_per_step
+            dom.sync_seconds_per_step,
+            totals.mean_updates()
         ))?;
         self.0.flush()
     }

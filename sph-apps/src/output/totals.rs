@@ -51,6 +51,8 @@ pub struct StageTotals {
     stage_sum: Vec<f64>,
     domain: DomainSummary,
     timed_steps: u64,
+    /// Particle updates over steps 2..N.
+    timed_updates: u64,
     last_total: Option<f64>,
     limits: BTreeMap<&'static str, u64>,
     bins: Option<BinSummary>,
@@ -65,6 +67,7 @@ impl StageTotals {
             stage_sum: vec![0.0; STAGES.len()],
             domain: DomainSummary::default(),
             timed_steps: 0,
+            timed_updates: 0,
             last_total: None,
             limits: BTreeMap::new(),
             bins: None,
@@ -91,6 +94,7 @@ impl StageTotals {
             dom.comm_seconds_per_step += d.comm_seconds_max;
             dom.sync_seconds_per_step += d.sync_seconds_max;
             self.timed_steps += 1;
+            self.timed_updates += r.updates;
         }
         (self.domain.owned_min, self.domain.owned_max) = (d.owned_min, d.owned_max);
         self.last_total = Some(r.times.total());
@@ -120,6 +124,12 @@ impl StageTotals {
             .iter()
             .map(|(k, v)| (k.to_string(), *v))
             .collect()
+    }
+
+    /// Mean particle updates per step over steps 2..N (all particles in
+    /// a global run; the active ones per sub-step with block steps).
+    pub fn mean_updates(&self) -> f64 {
+        self.timed_updates as f64 / self.steps_div()
     }
 
     fn steps_div(&self) -> f64 {

@@ -40,6 +40,7 @@ use crate::timestep::{DtLimit, TimeSteps};
 use crate::{CoreError, Particles};
 use rayon::prelude::*;
 use sph_comm::{Communicator, ReduceOp};
+use sph_gravity::Targets;
 use sph_kernels::Kernel;
 use sph_tree::{BoundingBox, CompactNeighborList, NeighborStats};
 use std::ops::Range;
@@ -61,6 +62,10 @@ pub(super) struct BlockState {
     /// The most any particle can have moved since the last sync (the sum
     /// of each sub-step's largest move, all ranks).
     drift_since_sync: f64,
+    /// The box the domain's keys were computed in at the last sync (open
+    /// axes grow between syncs; the gravity tree's cells are those of
+    /// this box).
+    sync_box: Option<BoundingBox>,
     /// Whether the next sub-step syncs: when the largest h plus that
     /// drift passes the halos' reach (`Domain::h_limit`), a pair of the
     /// next sub-step might be missing from the halos or the tree's cells.
@@ -165,6 +170,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             self.tree
                 .rebuild(self.domain.keys(), &p.x, &p.y, &p.z, self.config.bucket)?;
             self.block.drift_since_sync = 0.0;
+            self.block.sync_box = Some(*bbox);
             self.block.syncs += 1;
             owned
         } else {
@@ -212,6 +218,20 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         if first {
             // Adams-Bashforth needs du_{n-1}; the first step uses du_0.
             p.du_prev[owned.clone()].copy_from_slice(&p.du[owned.clone()]);
+        }
+        if self.gravity.is_some() {
+            // The active particles' groups, on the tree of the last sync
+            // (refitted) with its cells widened by the drift since.
+            let active = std::mem::take(&mut self.block.active);
+            let keyed = self.block.sync_box.unwrap_or(*bbox);
+            let targets = Targets {
+                active: Some(&active),
+                drift: self.block.drift_since_sync,
+            };
+            let added = self.add_gravity(p, &keyed, owned.clone(), targets, step);
+            self.block.active = active;
+            added?;
+            clock.lap(Stage::Gravity);
         }
 
         let sync = self.domain.stats();
@@ -395,6 +415,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         }
         let (hv, comp) = (&self.buf.h_over_vsig, &self.buf.compression);
         let energy = self.config.eos.uses_internal_energy();
+        let gravity = self.gravity.is_some();
         b.new_bin.clear();
         b.new_bin.resize(owned.len(), 0);
         let (active, nb) = (&b.active, &b.neighbour_bin);
@@ -408,7 +429,14 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                     return Ok(());
                 }
                 let cooling = super::stages::cooling_rate(p, i, energy);
-                let dt = ts.particle_dt(hv[i], comp[i], 0.0, cooling);
+                // The acceleration criterion with self-gravity, as the
+                // global step has it.
+                let acc = if gravity {
+                    (p.ax[i] * p.ax[i] + p.ay[i] * p.ay[i] + p.az[i] * p.az[i]).sqrt()
+                } else {
+                    0.0
+                };
+                let dt = ts.particle_dt(hv[i], comp[i], acc, cooling);
                 let old = (!first).then(|| bin_of(p.bin[i]));
                 let ngb = nb[k].is_finite().then(|| bin_of(nb[k]));
                 let (bin, _) = line

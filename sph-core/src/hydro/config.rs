@@ -123,9 +123,7 @@ impl HydroConfig {
     /// particle table (`docs/block-timesteps.md`, section 2).
     fn block_support(&self) -> Result<(), CoreError> {
         let s = &self.scheme;
-        let missing = if self.gravity.is_some() {
-            Some("self-gravity")
-        } else if self.stirring.is_some() {
+        let missing = if self.stirring.is_some() {
             Some("turbulence driving")
         } else if s.volume == crate::Volume::PressureEnergy {
             Some("pressure-energy volumes")

@@ -14,7 +14,7 @@ use crate::timestep::DtLimit;
 use crate::{CoreError, Particles};
 use sph_comm::{Communicator, SerialComm};
 use sph_domain::{Domain, DomainConfig};
-use sph_gravity::{DistributedGravity, GravityField};
+use sph_gravity::{DistributedGravity, GravityField, Targets};
 use sph_kernels::Kernel;
 use sph_tree::{BoundingBox, CompactNeighborList, NeighborStats, Octree};
 use std::ops::Range;
@@ -284,7 +284,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         }
         self.stir(p, bbox, owned.clone())?;
         clock.lap(Stage::Stirring);
-        let acc_max = self.add_gravity(p, bbox, owned.clone(), step)?;
+        let acc_max = self.add_gravity(p, bbox, owned.clone(), Targets::ALL, step)?;
         clock.lap(Stage::Gravity);
 
         // One global sum: conserved quantities, neighbour and domain totals,
@@ -475,7 +475,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         self.eos(p, owned.clone())?;
         self.exchange_thermo(p)?;
         if self.gravity.is_some() {
-            self.gravity_field(p, bbox, owned, self.step)?;
+            self.gravity_field(p, bbox, owned, Targets::ALL, self.step)?;
         }
         Ok(())
     }

@@ -19,7 +19,7 @@ use crate::scheme::{Viscosity, Volume};
 use crate::{CoreError, Particles};
 use rayon::prelude::*;
 use sph_comm::{Communicator, ReduceOp};
-use sph_gravity::{Decomposition, GravityStats};
+use sph_gravity::{Decomposition, GravityStats, Targets};
 use sph_kernels::Kernel;
 use sph_tree::{BoundingBox, CompactNeighborList, NeighborStats};
 use std::ops::Range;
@@ -289,17 +289,20 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         p: &mut Particles,
         bbox: &BoundingBox,
         owned: Range<usize>,
+        targets: Targets<'_>,
         step: u64,
     ) -> Result<f64, CoreError> {
         if self.gravity.is_none() {
             return Ok(0.0);
         }
-        self.gravity_field(p, bbox, owned.clone(), step)?;
+        self.gravity_field(p, bbox, owned.clone(), targets, step)?;
         let f = &self.field;
         for (k, i) in owned.clone().enumerate() {
-            p.ax[i] += f.ax[k];
-            p.ay[i] += f.ay[k];
-            p.az[i] += f.az[k];
+            if targets.is_active(k) {
+                p.ax[i] += f.ax[k];
+                p.ay[i] += f.ay[k];
+                p.az[i] += f.az[k];
+            }
         }
         Ok(owned
             .map(|i| (p.ax[i] * p.ax[i] + p.ay[i] * p.ay[i] + p.az[i] * p.az[i]).sqrt())
@@ -338,13 +341,16 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             .reduce(|| [0.0; 4], |x, y| std::array::from_fn(|k| x[k].max(y[k])))
     }
 
-    /// Evaluates the self-gravity of all particles on the owned ones (into
-    /// the gravity field buffer) and stores their potential in `phi`.
+    /// Evaluates the self-gravity of all particles on the owned `targets`
+    /// (flags and drift relative to the owned range; into the gravity
+    /// field buffer) and stores their potential in `phi`. `bbox` is the
+    /// box the domain's keys were computed in.
     pub(super) fn gravity_field(
         &mut self,
         p: &mut Particles,
         bbox: &BoundingBox,
         owned: Range<usize>,
+        targets: Targets<'_>,
         step: u64,
     ) -> Result<GravityStats, CoreError> {
         let Some(solver) = self.gravity.as_mut() else {
@@ -386,10 +392,18 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 &p.z[r.clone()],
                 &p.m[r.clone()],
                 Some(&p.h[r.clone()]),
+                targets,
                 &mut self.field,
             )
             .map_err(|source| CoreError::Gravity { step, source })?;
-        p.phi[owned].copy_from_slice(&self.field.phi);
+        match targets.active {
+            None => p.phi[owned].copy_from_slice(&self.field.phi),
+            Some(active) => {
+                for (k, i) in owned.enumerate().filter(|&(k, _)| active[k]) {
+                    p.phi[i] = self.field.phi[k];
+                }
+            }
+        }
         Ok(stats)
     }
 

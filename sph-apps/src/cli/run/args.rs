@@ -123,8 +123,9 @@ pub(crate) struct RunArgs {
     /// (`--dt-max`), with a limiter: a blast's cold gas then takes a few
     /// long steps while the shock takes many short ones. `kdk`: the same
     /// integrator with every particle in the smallest bin. For now `block`
-    /// covers ideal-gas hydro without gravity or driving, pressure-energy
-    /// volumes, the Balsara limiter or viscosity cleaning; outputs are
+    /// covers ideal-gas hydro, with or without self-gravity, without
+    /// driving, pressure-energy volumes, the Balsara limiter or viscosity
+    /// cleaning; outputs are
     /// written at the sub-steps that reach them (`docs/block-timesteps.md`).
     #[arg(long, value_parser = choice::<TimeSteps>())]
     pub(crate) time_steps: Option<TimeSteps>,
