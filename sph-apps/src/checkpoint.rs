@@ -34,7 +34,7 @@ use crate::output::snapshot::{self, field};
 use crate::AppError;
 use sph_comm::Communicator;
 use sph_core::fields::Column;
-use sph_core::{FieldSet, Particles, RunState};
+use sph_core::{BlockRun, FieldSet, Particles, RunState};
 use sph_io::{Attr, FieldData, H5Part, Selection, Snapshot, SnapshotReader};
 use sph_tree::BoundingBox;
 use std::ops::Range;
@@ -141,6 +141,13 @@ pub fn snapshot(
     }
     snap.set_attr("sphexa_kind", Attr::Str(KIND.into()))
         .set_attr("h_next_max", Attr::F64(s.h_next_max.unwrap_or(f64::NAN)));
+    if let Some(b) = s.block {
+        snap.set_attr(TIME_LINE, Attr::F64Array(vec![b.t_begin, b.t_end]))
+            .set_attr(TIME_LINE_TOP_BIN, Attr::I64(i64::from(b.dt_max_bin)))
+            .set_attr(TIME_LINE_TICK, Attr::I64(b.ti as i64))
+            .set_attr(PARTICLE_UPDATES, Attr::I64(b.updates as i64))
+            .set_attr(DOMAIN_SYNCS, Attr::I64(b.syncs as i64));
+    }
     for name in fields(p) {
         if let Some(data) = field(p, owned.clone(), name) {
             snap.set_field(name, data);
@@ -148,6 +155,18 @@ pub fn snapshot(
     }
     snap
 }
+
+/// Attribute of block-step runs: the time line's start and end times.
+pub const TIME_LINE: &str = "time_line";
+/// Attribute of block-step runs: the longest step's bin.
+pub const TIME_LINE_TOP_BIN: &str = "time_line_top_bin";
+/// Attribute of block-step runs: the tick of the checkpoint (a
+/// synchronisation point).
+pub const TIME_LINE_TICK: &str = "time_line_tick";
+/// Attribute of block-step runs: particle updates so far.
+pub const PARTICLE_UPDATES: &str = "particle_updates";
+/// Attribute of block-step runs: domain syncs so far.
+pub const DOMAIN_SYNCS: &str = "domain_syncs";
 
 /// Attribute: the stirring's work up to the checkpoint's time (stirred
 /// runs only; 0 when absent).
@@ -312,12 +331,14 @@ pub fn load<C: Communicator>(comm: &C, spec: &str) -> Result<Loaded, AppError> {
             )))
         }
     };
+    let block = block_run(&rows).map_err(bad)?;
     let state = RunState {
         step: rows.step,
         t: rows.time,
         dt_prev: rows.dt,
         h_next_max,
         external_work,
+        block,
     };
     let bbox = snapshot::bounding_box(&rows.bbox).map_err(|e| bad(format!("its box: {e}")))?;
     let total = usize::try_from(total)
@@ -332,6 +353,34 @@ pub fn load<C: Communicator>(comm: &C, spec: &str) -> Result<Loaded, AppError> {
         stirring,
         rows,
     })
+}
+
+/// The time line of a block-step run's checkpoint (none without its
+/// attributes); what is wrong, in words.
+fn block_run(rows: &Snapshot) -> Result<Option<BlockRun>, String> {
+    let count = |name: &str| match rows.attr(name) {
+        Some(Attr::I64(v)) if *v >= 0 => Ok(*v as u64),
+        other => Err(format!("{name} is {other:?}, not a whole number >= 0")),
+    };
+    match rows.attr(TIME_LINE) {
+        None => Ok(None),
+        Some(Attr::F64Array(span)) if span.len() == 2 => {
+            let top = count(TIME_LINE_TOP_BIN)?;
+            let top =
+                u8::try_from(top).map_err(|_| format!("{TIME_LINE_TOP_BIN} {top} is too large"))?;
+            Ok(Some(BlockRun {
+                t_begin: span[0],
+                t_end: span[1],
+                dt_max_bin: top,
+                ti: count(TIME_LINE_TICK)?,
+                updates: count(PARTICLE_UPDATES)?,
+                syncs: count(DOMAIN_SYNCS)?,
+            }))
+        }
+        Some(other) => Err(format!(
+            "{TIME_LINE} is {other:?}, not the two times of a time line"
+        )),
+    }
 }
 
 /// Particles with the optional `fields` and, from `rows`, every value a

@@ -233,16 +233,13 @@ impl<C: Communicator> Simulation<C> {
             )));
         }
         let (t0, dt0) = resume.map_or((0.0, scene.dt0), |s| (s.t, s.dt_prev));
-        if resume.is_some() && scene.config.time_steps.on_time_line() {
-            return Err(AppError::Usage(
-                "a block-step run cannot be restarted yet (its checkpoints do not hold the time line); restart with --time-steps global, or run from the start".into(),
-            ));
-        }
         let scene_gravity = scene.config.gravity.is_some();
         let mut hydro =
             Hydro::with_comm(kernel, scene.config, t0, dt0, comm, DomainConfig::default())?;
         match resume {
-            Some(state) => hydro.restore_run_state(state),
+            Some(state) => hydro
+                .restore_run_state(state)
+                .map_err(|e| AppError::Usage(e.to_string()))?,
             None => hydro.prepare(&mut scene.particles),
         }
         Ok(Self {
@@ -390,6 +387,15 @@ impl<C: Communicator> Simulation<C> {
                 &eos,
                 &self.scene.bbox,
             )?;
+        }
+        if let (Some(line), Stop::Time(te)) = (self.hydro.time_line(), stop) {
+            // A restarted block-step run continues its line to its end.
+            let end = line.time(sph_core::timeline::LINE);
+            if te != end {
+                return Err(AppError::Usage(format!(
+                    "--end-time {te}: the checkpoint's block-step time line ends at t = {end}; continue to that end (give --end-time {end} or leave it out)"
+                )));
+            }
         }
         if self.scene.config.time_steps.on_time_line() && self.hydro.time_line().is_none() {
             let end = match stop {

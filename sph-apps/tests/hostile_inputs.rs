@@ -68,6 +68,7 @@ fn fixture() -> &'static Fixture {
             dt_prev: 1.5e-4,
             h_next_max: Some(0.21),
             external_work: 0.0,
+            block: None,
         };
         let attrs = [
             (

@@ -4,7 +4,9 @@
 //! checkpoint, restarted on 1 and on 4 ranks, gives the conserved
 //! quantities and the step-20 snapshot of the uninterrupted serial run to
 //! the bit, and the snapshot written by 2 ranks holds the serial run's
-//! particles in the same order.
+//! particles in the same order; the same for a block-step Sedov run
+//! (checkpoint at the synchronisation point of sub-step 44, snapshot at
+//! 55).
 
 mod common;
 
@@ -50,14 +52,23 @@ fn written_on_two_ranks_restarted_on_one_and_four() {
     // Sedov, and turbulence: its driving state (OU phases, generator,
     // work) continues from the checkpoint too.
     for case in ["sedov", "turbulence"] {
-        restarted_on_one_and_four(case);
+        restarted_on_one_and_four(case, &[], [10, 20]);
     }
+    // Block time steps: the checkpoint falls due at sub-step 10 and is
+    // written at the next synchronisation point, sub-step 44; the time
+    // line (tick, span, longest bin) and the held fields continue from it.
+    restarted_on_one_and_four("sedov", &["--time-steps", "block"], [44, 55]);
 }
 
-fn restarted_on_one_and_four(case: &str) {
-    let root = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("mpi-restart-{case}"));
+/// `case` with `options` for `steps[1]` steps on 1 and 2 ranks, a
+/// checkpoint due every 10 steps and a snapshot at `steps[1]`; the
+/// 2-rank checkpoint of step `steps[0]` restarted on 1 and 4 ranks.
+fn restarted_on_one_and_four(case: &str, options: &[&str], [at, steps]: [usize; 2]) {
+    let label = format!("{case}{}", options.join(""));
+    let root = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("mpi-restart-{label}"));
     std::fs::remove_dir_all(&root).ok();
     let dir = |n: &str| root.join(n).to_str().expect("UTF-8").to_owned();
+    let steps_s = steps.to_string();
     let common = [
         case,
         "-n",
@@ -68,10 +79,11 @@ fn restarted_on_one_and_four(case: &str) {
         "--checkpoint-every",
         "10",
         "--snapshot-every-steps",
-        "20",
+        &steps_s,
     ];
     let with = |out: &str, extra: &[&str]| {
         let mut v: Vec<String> = common.iter().map(|s| s.to_string()).collect();
+        v.extend(options.iter().map(|s| s.to_string()));
         v.extend(["--out".into(), out.to_owned()]);
         if case == "turbulence" {
             // Spectra too: a fixed-point deposit reduced over the ranks.
@@ -80,23 +92,27 @@ fn restarted_on_one_and_four(case: &str) {
         v.extend(extra.iter().map(|s| s.to_string()));
         v
     };
-    mpirun(1, &refs(&with(&dir("serial"), &["--steps", "20"])));
-    mpirun(2, &refs(&with(&dir("two"), &["--steps", "20"])));
-    let ckpt = root.join("two/checkpoints/checkpoint_00000010.h5");
+    mpirun(1, &refs(&with(&dir("serial"), &["--steps", &steps_s])));
+    mpirun(2, &refs(&with(&dir("two"), &["--steps", &steps_s])));
+    let ckpt = root.join(format!("two/checkpoints/checkpoint_{at:08}.h5"));
     let ckpt = ckpt.to_str().expect("UTF-8");
     for ranks in [1, 4] {
         let out = dir(&format!("restart-{ranks}"));
-        mpirun(ranks, &["--restart", ckpt, "--steps", "20", "--out", &out]);
+        mpirun(
+            ranks,
+            &["--restart", ckpt, "--steps", &steps_s, "--out", &out],
+        );
     }
     let serial = root.join("serial");
-    let want_lines = lines_after(&serial, 10);
-    assert_eq!(want_lines.len(), 10);
-    let want = read(&serial.join("snapshots/snapshot_00000020.h5"));
+    let want_lines = lines_after(&serial, at);
+    assert_eq!(want_lines.len(), steps - at, "{label}");
+    let snapshot = format!("snapshots/snapshot_{steps:08}.h5");
+    let want = read(&serial.join(&snapshot));
     assert_eq!(want.len(), 4096);
-    let two = read(&root.join("two/snapshots/snapshot_00000020.h5"));
+    let two = read(&root.join("two").join(&snapshot));
     assert!(
         two.bits_eq(&want),
-        "{case}: the 2-rank snapshot differs from the serial one"
+        "{label}: the 2-rank snapshot differs from the serial one"
     );
     assert_eq!(lines_after(&root.join("two"), 0), lines_after(&serial, 0));
     if case == "turbulence" {
@@ -128,12 +144,12 @@ fn restarted_on_one_and_four(case: &str) {
         assert_eq!(
             lines_after(&d, 0),
             want_lines,
-            "{case}, {ranks} ranks: conserved.csv"
+            "{label}, {ranks} ranks: conserved.csv"
         );
-        let got = read(&d.join("snapshots/snapshot_00000020.h5"));
+        let got = read(&d.join(&snapshot));
         assert!(
             got.bits_eq(&want),
-            "{case}, {ranks} ranks: the step-20 snapshot differs"
+            "{label}, {ranks} ranks: the step-{steps} snapshot differs"
         );
     }
 }

@@ -92,6 +92,72 @@ fn a_restarted_run_continues_bit_identically() {
     assert!(e.contains("sedov") && e.contains("noh"), "{e}");
 }
 
+/// Block time steps: checkpoints fall due every 10 sub-steps and are
+/// written at the next synchronisation point (every particle's step
+/// ended). Sedov 16^3 to t = 0.05 in one run against 55 sub-steps, then a
+/// restart from the checkpoint of sub-step 51 to the end, in the same
+/// folder: the same conserved.csv and final state to the bit. A block
+/// checkpoint continues only its own time line under block steps.
+#[test]
+fn a_restarted_block_step_run_continues_bit_identically() {
+    let dir = scratch("sedov-block");
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    let run = |out: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "sedov",
+            "-n",
+            "16",
+            "-q",
+            "--time-steps",
+            "block",
+            "--checkpoint-every",
+            "10",
+            "--checkpoint-keep",
+            "0",
+            "--write-particles",
+            "--out",
+            s(out),
+        ];
+        args.extend_from_slice(extra);
+        ok(&args);
+    };
+    run(&a, &["--end-time", "0.05"]);
+    run(&b, &["--steps", "55"]);
+    let listing = |d: &Path| -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(d.join("checkpoints"))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    };
+    // Due at 10, 20, ...; written where every particle's step ends.
+    let written = listing(&a);
+    assert!(
+        written.len() >= 2 && !written.contains(&"checkpoint_00000010.h5".to_string()),
+        "{written:?}"
+    );
+    let ckpt = b.join("checkpoints/checkpoint_00000051.h5");
+    assert!(ckpt.exists(), "{:?}", listing(&b));
+    let e = refused(&["--restart", s(&ckpt), "--end-time", "0.06", "-q"]);
+    assert!(e.contains("0.06") && e.contains("0.05"), "{e}");
+    let e = refused(&["--restart", s(&ckpt), "--time-steps", "global", "-q"]);
+    assert!(e.contains("block-step"), "{e}");
+    ok(&["--restart", s(&ckpt), "--end-time", "0.05", "-q"]);
+    for file in ["conserved.csv", "particles.csv"] {
+        let (fa, fb) = (
+            std::fs::read(a.join(file)).unwrap(),
+            std::fs::read(b.join(file)).unwrap(),
+        );
+        assert!(fa == fb, "{file} differs after the restart");
+    }
+    assert_same_state(
+        &read(&a.join("checkpoints/checkpoint_00000064.h5")),
+        &read(&b.join("checkpoints/checkpoint_00000064.h5")),
+        "the last checkpoint",
+    );
+}
+
 /// Kill test: a run checkpointing every step is killed with SIGKILL inside
 /// its 4th checkpoint write, with the data in `checkpoint_00000004.h5.tmp`
 /// and before the rename (the test hook of `sph_apps::checkpoint` pauses

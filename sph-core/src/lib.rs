@@ -80,7 +80,8 @@ pub use conserved::Conserved;
 pub use eos::Eos;
 pub use error::CoreError;
 pub use hydro::{
-    DomainStepStats, Hydro, HydroConfig, RunState, StageTimes, StepReport, BIN_OFFSETS, STAGES,
+    BlockRun, DomainStepStats, Hydro, HydroConfig, RunState, StageTimes, StepReport, BIN_OFFSETS,
+    STAGES,
 };
 pub use integrate::HUpdate;
 pub use neighbors::NeighborParams;

@@ -111,6 +111,31 @@ impl TimeLine {
         Ok(line)
     }
 
+    /// The line over `[t_begin, t_end]` whose longest step is `2^top`
+    /// ticks: the line [`new`](Self::new) made, rebuilt from its parts
+    /// (a checkpoint's), with the same bits.
+    ///
+    /// ```
+    /// use sph_core::timeline::TimeLine;
+    /// let line = TimeLine::new(0.0, 0.05, 0.05 / 8.0).unwrap();
+    /// let again = TimeLine::with_top_bin(0.0, 0.05, line.dt_max_bin()).unwrap();
+    /// assert_eq!(line, again);
+    /// ```
+    ///
+    /// # Errors
+    /// As [`new`](Self::new), and a bin above [`MAX_BIN`].
+    pub fn with_top_bin(t_begin: f64, t_end: f64, top: Bin) -> Result<Self, CoreError> {
+        if top.0 > MAX_BIN {
+            return Err(CoreError::Invalid(format!(
+                "time line: longest bin {} is above {MAX_BIN}",
+                top.0
+            )));
+        }
+        let mut line = Self::new(t_begin, t_end, t_end - t_begin)?;
+        line.dt_max_bin = top;
+        Ok(line)
+    }
+
     /// The length of one tick.
     pub fn time_base(&self) -> f64 {
         self.time_base

@@ -104,6 +104,8 @@ pub struct FileOutputs {
     pub summary: IoSummary,
     /// The test hook of [`checkpoint`], if set.
     pause: Option<checkpoint::TestPause>,
+    /// A checkpoint fell due and waits for a synchronisation point.
+    checkpoint_latched: bool,
 }
 
 impl FileOutputs {
@@ -147,6 +149,7 @@ impl FileOutputs {
             last_checkpoint: Instant::now(),
             summary: IoSummary::default(),
             pause,
+            checkpoint_latched: false,
         })
     }
 
@@ -235,7 +238,13 @@ impl<C: Communicator> StepObserver<C> for FileOutputs {
                 comm.all_reduce_scalar(u64::from(late), ReduceOp::Max) > 0
             }
         };
+        // Block time steps: a due checkpoint waits for the next
+        // synchronisation point (every particle's step ended), where a
+        // restart continues the hierarchy to the bit.
+        files.checkpoint_latched |= checkpoint_due;
+        let checkpoint_due = files.checkpoint_latched && view.report.ends_synchronised;
         if checkpoint_due {
+            files.checkpoint_latched = false;
             let mut snap = checkpoint::snapshot(p, owned, state, view.bbox, attrs);
             if let Some(s) = view.stirring {
                 for (name, value) in checkpoint::StirState::attrs(s, state.external_work) {

@@ -26,13 +26,15 @@
 //! with the velocity they would have had at its start.
 //!
 //! The domain syncs (migration, sort, halos, tree rebuild) on the first
-//! sub-step and whenever the largest h plus the largest drift since the
-//! last sync passes the halos' reach; in between, halos get their owners'
+//! sub-step, at every synchronisation point (every particle active: where
+//! checkpoints are written, so a restart continues to the bit) and
+//! whenever the largest h plus the largest drift since the last sync
+//! passes the halos' reach; in between, halos get their owners'
 //! state by a plain exchange and the tree is refitted to the drifted
 //! positions (same cells, exact boxes), so searches stay exact.
 
 use super::report::{DomainStepStats, Stage, StageClock};
-use super::{grow_open_axes, Hydro, StepReport};
+use super::{grow_open_axes, BlockRun, Hydro, StepReport};
 use crate::conserved::Conserved;
 use crate::pair_loop::{neighbour_lanes, F64s, Group, PairLoop, PairStage};
 use crate::timeline::{is_active, step_begin, Bin, Ticks, TimeLine, LINE, MAX_BIN};
@@ -66,6 +68,14 @@ pub(super) struct BlockState {
     /// axes grow between syncs; the gravity tree's cells are those of
     /// this box).
     sync_box: Option<BoundingBox>,
+    /// Whether every particle is active at the current tick (a
+    /// synchronisation point): the sub-step there reports `all_active`
+    /// and syncs the domain, so that a restart from a checkpoint written
+    /// just before it continues to the bit.
+    at_sync_point: bool,
+    /// A restored run: its first sub-step checks that every particle is
+    /// active (the checkpoint was written at a synchronisation point).
+    restored: bool,
     /// Whether the next sub-step syncs: when the largest h plus that
     /// drift passes the halos' reach (`Domain::h_limit`), a pair of the
     /// next sub-step might be missing from the halos or the tree's cells.
@@ -142,6 +152,42 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         self.block.updates
     }
 
+    /// The run's place on its time line, once the first sub-step has
+    /// given the particles bins (for checkpoints).
+    pub(super) fn block_run(&self) -> Option<BlockRun> {
+        let line = self.block.line?;
+        (self.config.time_steps.on_time_line() && self.block.started).then(|| BlockRun {
+            t_begin: line.time(0),
+            t_end: line.time(LINE),
+            dt_max_bin: line.dt_max_bin().0,
+            ti: self.block.ti,
+            updates: self.block.updates,
+            syncs: self.block.syncs,
+        })
+    }
+
+    /// Continues the time line of a checkpoint written at a
+    /// synchronisation point: the next sub-step syncs the domain, as the
+    /// run that wrote it did there.
+    pub(super) fn restore_block_run(&mut self, b: BlockRun) -> Result<(), CoreError> {
+        let line = TimeLine::with_top_bin(b.t_begin, b.t_end, Bin(b.dt_max_bin))?;
+        if b.ti >= LINE {
+            return Err(CoreError::Invalid(format!(
+                "the checkpoint's time line is at its end (tick {} of {LINE}): nothing to continue",
+                b.ti
+            )));
+        }
+        self.block.line = Some(line);
+        self.block.ti = b.ti;
+        self.block.started = true;
+        self.block.updates = b.updates;
+        self.block.syncs = b.syncs;
+        self.block.sync_due = true;
+        self.block.at_sync_point = true;
+        self.block.restored = true;
+        Ok(())
+    }
+
     /// One sub-step of a block-step run (see the module's text).
     pub(super) fn substep(
         &mut self,
@@ -182,6 +228,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         clock.lap(Stage::Tree);
 
         let ti = self.block.ti;
+        let all_active = first || self.block.at_sync_point;
         let mut active = std::mem::take(&mut self.block.active);
         active.clear();
         active.extend(
@@ -189,6 +236,19 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 .clone()
                 .map(|i| first || is_active(ti, bin_of(p.bin[i]))),
         );
+        if std::mem::take(&mut self.block.restored) {
+            let behind = owned.clone().zip(&active).find(|(_, &a)| !a);
+            let behind = self.domain.comm().all_reduce_scalar(
+                behind.map_or(f64::INFINITY, |(i, _)| p.id[i] as f64),
+                ReduceOp::Min,
+            );
+            if behind.is_finite() {
+                self.block.active = active;
+                return Err(CoreError::Invalid(format!(
+                    "the checkpoint is not at a synchronisation point: particle {behind} is inside its step at tick {ti}; block-step runs write checkpoints where every particle's step ends"
+                )));
+            }
+        }
         let active_here = active.iter().filter(|&&a| a).count();
         let searched = self.search(p, bbox, step, owned.clone(), Some(&active));
         self.block.active = active;
@@ -262,12 +322,15 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
 
         let (nc_min, nc_max, h_max) =
             owned_extremes(p, owned.clone(), &neighbours, &self.block.active);
+        // Whether some particle's step goes on past `next`.
+        let goes_on = owned.clone().any(|i| !is_active(next, bin_of(p.bin[i])));
         let mut ext = [
             -nc_min,
             nc_max,
             h_max,
             sync.owned as f64,
             -(sync.owned as f64),
+            f64::from(u8::from(goes_on)),
         ];
         let comm = self.domain.comm();
         comm.all_reduce(&mut ext, ReduceOp::Max);
@@ -283,7 +346,10 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         // Global figures only, so every rank count syncs at the same
         // sub-steps and sums in the same order.
         self.block.drift_since_sync += reach;
-        self.block.sync_due = ext[2] + self.block.drift_since_sync > self.domain.h_limit();
+        let ends_synchronised = ext[5] == 0.0;
+        self.block.at_sync_point = ends_synchronised;
+        self.block.sync_due =
+            ends_synchronised || ext[2] + self.block.drift_since_sync > self.domain.h_limit();
 
         let t = self.t;
         let t_next = line.time(next);
@@ -321,6 +387,8 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             },
             bins: None,
             updates: updates as u64,
+            all_active,
+            ends_synchronised,
         })
     }
 

@@ -60,7 +60,9 @@ mod stir;
 use block::BlockState;
 use buffers::StepBuffers;
 pub use config::HydroConfig;
-pub use report::{DomainStepStats, RunState, Stage, StageTimes, StepReport, BIN_OFFSETS, STAGES};
+pub use report::{
+    BlockRun, DomainStepStats, RunState, Stage, StageTimes, StepReport, BIN_OFFSETS, STAGES,
+};
 use report::{StageClock, StepExtremes};
 
 /// The hydro pipeline of one rank with its reusable buffers. The domain
@@ -207,20 +209,45 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             dt_prev: self.dt_prev,
             h_next_max: self.next_h_max,
             external_work: self.external_work,
+            block: self.block_run(),
         }
     }
 
     /// Continues from a checkpoint's [`RunState`] (steps done, time,
-    /// previous step, the next sync's largest h). The particles must be
-    /// the checkpoint's, with their integrator history (`dx`, `du_prev`,
-    /// `alpha`): do not [`prepare`](Self::prepare) them.
-    pub fn restore_run_state(&mut self, s: RunState) {
+    /// previous step, the next sync's largest h, a block-step run's time
+    /// line). The particles must be the checkpoint's, with their
+    /// integrator history (`dx`, `du_prev`, `alpha`, and under block steps
+    /// the held fields): do not [`prepare`](Self::prepare) them.
+    ///
+    /// # Errors
+    /// A block-step state for a global configuration or the reverse, or a
+    /// time line that is not one (named).
+    pub fn restore_run_state(&mut self, s: RunState) -> Result<(), CoreError> {
+        let block = self.config.time_steps.on_time_line();
+        match (block, s.block) {
+            (true, Some(b)) => self.restore_block_run(b)?,
+            (false, None) => {}
+            (true, None) => {
+                return Err(CoreError::Invalid(format!(
+                    "--time-steps {}: the checkpoint (step {}) holds no block-step time line; continue it with --time-steps global",
+                    crate::Choice::name(&self.config.time_steps),
+                    s.step
+                )))
+            }
+            (false, Some(_)) => {
+                return Err(CoreError::Invalid(format!(
+                    "--time-steps global: the checkpoint (step {}) is of a block-step run; continue it with the time steps it was written with",
+                    s.step
+                )))
+            }
+        }
         self.step = s.step;
         self.t = s.t;
         self.dt_prev = s.dt_prev;
         self.next_h_max = s.h_next_max;
         self.external_work = s.external_work;
         self.dt_cap = f64::INFINITY;
+        Ok(())
     }
 
     /// Caps the next step (to land exactly on an output or end time).
@@ -411,6 +438,8 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             },
             bins,
             updates: updates as u64,
+            all_active: true,
+            ends_synchronised: true,
         })
     }
 

@@ -195,6 +195,29 @@ pub struct RunState {
     /// Work done on the gas by the stirring from the run's start to `t`
     /// (0 without stirring).
     pub external_work: f64,
+    /// Where a block-step run stands on its time line (none for a global
+    /// run, or before the first sub-step).
+    pub block: Option<BlockRun>,
+}
+
+/// A block-step run's place on its time line, as checkpoints keep it:
+/// the line (its span and longest step), the current tick and the run's
+/// counts so far. A restart from a synchronisation point (every particle
+/// active) with it continues the hierarchy to the bit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BlockRun {
+    /// The line's start time.
+    pub t_begin: f64,
+    /// The line's end time (the run's end).
+    pub t_end: f64,
+    /// The longest step's bin (`2^bin` ticks).
+    pub dt_max_bin: u8,
+    /// The current tick.
+    pub ti: u64,
+    /// Particle updates so far.
+    pub updates: u64,
+    /// Domain syncs so far.
+    pub syncs: u64,
 }
 
 /// What one step did.
@@ -231,6 +254,14 @@ pub struct StepReport {
     /// Particle updates of the step (all ranks): every particle in a
     /// global run, the active ones in a block-step sub-step.
     pub updates: u64,
+    /// Whether every particle was active in the step, so that `conserved`
+    /// holds fresh values of all of them (always in a global run; in a
+    /// block-step run, the sub-steps starting at a synchronisation point).
+    pub all_active: bool,
+    /// Whether every particle's step ends where this one ends: the state
+    /// after it is a synchronisation point, where block-step runs write
+    /// checkpoints (always in a global run).
+    pub ends_synchronised: bool,
 }
 
 /// The entries of [`StepReport::bins`].
