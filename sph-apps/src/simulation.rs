@@ -234,6 +234,7 @@ impl<C: Communicator> Simulation<C> {
         }
         let (t0, dt0) = resume.map_or((0.0, scene.dt0), |s| (s.t, s.dt_prev));
         let scene_gravity = scene.config.gravity.is_some();
+        let scene_block = scene.config.time_steps.on_time_line();
         let mut hydro =
             Hydro::with_comm(kernel, scene.config, t0, dt0, comm, DomainConfig::default())?;
         match resume {
@@ -253,7 +254,10 @@ impl<C: Communicator> Simulation<C> {
             line_end: None,
             outputs: Outputs::default(),
             resumed_at: resume.map(|s| s.step),
-            watch: Some(Watch::new(watch::Bounds::for_run(scene_gravity), false)),
+            watch: Some(Watch::new(
+                watch::Bounds::for_run(scene_gravity, scene_block),
+                false,
+            )),
         })
     }
 

@@ -439,3 +439,68 @@ fn spectrum_of_a_snapshot() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("missing.h5"));
 }
+
+/// Block time steps: `timings.csv` has a row per synchronisation step
+/// whose sub-steps and updates add up to the run's (summary.json), and
+/// `conserved.csv` a row at each synchronisation point, the first
+/// sub-step of each timings row, at the multiples of the longest step.
+#[test]
+fn a_block_step_run_writes_a_row_per_synchronisation_step() {
+    let dir = scratch("sedov-block-rows");
+    common::ok(&[
+        "sedov",
+        "-n",
+        "12",
+        "-q",
+        "--time-steps",
+        "block",
+        "--end-time",
+        "0.05",
+        "--out",
+        s(&dir),
+    ]);
+    let table = |file: &str| -> (Vec<String>, Vec<Vec<String>>) {
+        let text = std::fs::read_to_string(dir.join(file)).unwrap();
+        let mut lines = text.lines();
+        let header = lines
+            .next()
+            .unwrap()
+            .split(',')
+            .map(str::to_owned)
+            .collect();
+        let rows = lines
+            .map(|l| l.split(',').map(str::to_owned).collect())
+            .collect();
+        (header, rows)
+    };
+    let (th, mut trows) = table("timings.csv");
+    let mean = trows.pop().unwrap();
+    assert_eq!(mean[0], "mean_2..N");
+    let col = |h: &[String], name: &str| h.iter().position(|c| c == name).unwrap();
+    let (cs, cu) = (col(&th, "substeps"), col(&th, "updates"));
+    let sum = |k: usize| {
+        trows
+            .iter()
+            .map(|r| r[k].parse::<u64>().unwrap())
+            .sum::<u64>()
+    };
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(sum(cs), summary["steps"].as_u64().unwrap());
+    assert_eq!(sum(cu), summary["particle_updates"].as_u64().unwrap());
+    assert!(
+        trows.iter().any(|r| r[cs] != "1"),
+        "some row of several sub-steps"
+    );
+    let (ch, crows) = table("conserved.csv");
+    let steps = |rows: &[Vec<String>]| rows.iter().map(|r| r[0].clone()).collect::<Vec<_>>();
+    assert_eq!(steps(&crows), steps(&trows));
+    // The longest step is an eighth of the line by default: the points
+    // are at its multiples.
+    let ct = col(&ch, "t");
+    for (k, r) in crows.iter().enumerate() {
+        let t: f64 = r[ct].parse().unwrap();
+        let m = t / (0.05 / 8.0);
+        assert!((m - m.round()).abs() < 1e-9, "row {k}: t = {t}");
+    }
+}

@@ -1,5 +1,7 @@
 //! `conserved.csv`: the conserved quantities and neighbour counts of every
-//! step, in full precision.
+//! step, in full precision; under block time steps, of every
+//! synchronisation point (the sub-steps where every particle is active, so
+//! that every sum is of fresh values).
 
 use super::observer::{Observed, StepObserver, StepView};
 use super::CsvFile;
@@ -93,7 +95,9 @@ impl ConservedCsv {
 
 impl<C> StepObserver<C> for ConservedCsv {
     fn step(&mut self, view: &StepView<'_, C>) -> Result<Observed, AppError> {
-        ConservedCsv::step(self, view.report, view.total)?;
+        if view.report.all_active {
+            ConservedCsv::step(self, view.report, view.total)?;
+        }
         Ok(Observed::Recorded)
     }
 
