@@ -43,6 +43,9 @@ pub struct Summary {
     pub particles: usize,
     /// Steps run (sub-steps of a block-step run).
     pub steps: u64,
+    /// How the particles shared time steps (`--time-steps`: global,
+    /// block or kdk).
+    pub time_steps: String,
     /// Particle updates over the run: particles times steps in a global
     /// run, the active particles summed over the sub-steps of a
     /// block-step run (since this process started or restarted the run).
@@ -131,6 +134,21 @@ pub struct Summary {
     /// only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bins: Option<BinSummary>,
+    /// Block time steps: the particles of each bin at the end of the run
+    /// (bins holding none left out), longest steps first.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_bins: Option<Vec<TimeBin>>,
+}
+
+/// One bin of a block-step run's particles (`summary.json`, `time_bins`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct TimeBin {
+    /// The bin: steps of `2^bin` ticks.
+    pub bin: u8,
+    /// Its step.
+    pub dt: f64,
+    /// Particles in it (all ranks).
+    pub particles: u64,
 }
 
 /// Whether a run of `hydro` has reached `stop`; if not, with an end time,
@@ -580,6 +598,7 @@ impl<C: Communicator> Simulation<C> {
             case: self.scene.case.to_string(),
             particles: n,
             steps: self.hydro.steps(),
+            time_steps: sph_core::Choice::name(&self.scene.config.time_steps).to_owned(),
             particle_updates: self.hydro.particle_updates(),
             full_step_equivalents: self.hydro.particle_updates() as f64 / n.max(1) as f64,
             domain_syncs: self.hydro.domain_syncs(),
@@ -599,6 +618,7 @@ impl<C: Communicator> Simulation<C> {
             stage_seconds: totals.stage_seconds(),
             dt_limits: totals.dt_limits(),
             bins: totals.bins(),
+            time_bins: self.time_bins(),
             l1: end.l1,
             energy_rel_drift: (end.conserved.e_tot() - first.e_tot() - work)
                 / (watch::energy_scale(&first, self.watch.as_ref().and_then(Watch::thermal_scale))
@@ -625,6 +645,39 @@ impl<C: Communicator> Simulation<C> {
                 .as_ref()
                 .map_or_else(WatchSummary::default, Watch::summary),
         }
+    }
+
+    /// The histogram of the particles' bins of a block-step run (all
+    /// ranks; collective), none in a global run.
+    fn time_bins(&self) -> Option<Vec<TimeBin>> {
+        let line = self.hydro.time_line()?;
+        let p = &self.scene.particles;
+        if p.bin.len() != p.len() {
+            return None;
+        }
+        let top = usize::from(sph_core::timeline::MAX_BIN);
+        let mut counts = vec![0.0; top + 1];
+        for i in self.hydro.owned() {
+            counts[(p.bin[i] as usize).min(top)] += 1.0;
+        }
+        // Counts below 2^53: exact in f64 sums.
+        self.hydro
+            .domain()
+            .comm()
+            .all_reduce(&mut counts, ReduceOp::Sum);
+        Some(
+            counts
+                .iter()
+                .enumerate()
+                .rev()
+                .filter(|(_, &c)| c > 0.0)
+                .map(|(b, &c)| TimeBin {
+                    bin: b as u8,
+                    dt: line.dt(sph_core::timeline::Bin(b as u8)),
+                    particles: c as u64,
+                })
+                .collect(),
+        )
     }
 
     /// Rank 0's files at the end of a run: the last line of `timings.csv`,

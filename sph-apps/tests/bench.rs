@@ -98,3 +98,58 @@ fn bench_writes_csv_json_and_a_real_plot() {
         assert!(colours.contains(&c), "colour {c:?} missing");
     }
 }
+
+/// `--time-steps global,block`: each combination both ways; bench.csv
+/// names the mode and counts the particle updates (every particle every
+/// step in the global run, fewer per sub-step under block steps), and the
+/// block runs form their own series.
+#[test]
+fn bench_sweeps_the_time_step_modes() {
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("bench-modes");
+    std::fs::remove_dir_all(&out).ok();
+    let o = sphexa_command()
+        .args([
+            "bench",
+            "sedov",
+            "--sizes",
+            "12",
+            "--time-steps",
+            "global,block",
+        ])
+        .args(["--threads", "1", "-q", "--out"])
+        .arg(&out)
+        .output()
+        .expect("sphexa runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(out.join("bench.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let modes: Vec<&str> = rows.iter().map(|r| r[col("time_steps")]).collect();
+    assert_eq!(modes, ["global", "block"]);
+    let num = |r: &Vec<&str>, c: &str| r[col(c)].parse::<u64>().unwrap();
+    let (g, b) = (&rows[0], &rows[1]);
+    assert_eq!(num(g, "particle_updates"), num(g, "steps") * num(g, "N"));
+    assert!(num(b, "particle_updates") < num(b, "steps") * num(b, "N"));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).unwrap()).unwrap();
+    let text = json.to_string();
+    assert!(text.contains("sedov case sinc:6 block"), "{text}");
+    let e = sphexa_command()
+        .args([
+            "bench",
+            "sedov",
+            "--sizes",
+            "12",
+            "--time-steps",
+            "adaptive",
+        ])
+        .output()
+        .expect("sphexa runs");
+    let stderr = String::from_utf8_lossy(&e.stderr);
+    assert!(
+        !e.status.success() && stderr.contains("adaptive") && stderr.contains("block"),
+        "{stderr}"
+    );
+}

@@ -441,7 +441,8 @@ fn spectrum_of_a_snapshot() {
 }
 
 /// Block time steps: `timings.csv` has a row per synchronisation step
-/// whose sub-steps and updates add up to the run's (summary.json), and
+/// whose sub-steps and updates add up to the run's (summary.json, whose
+/// `time_bins` hold every particle at the end), and
 /// `conserved.csv` a row at each synchronisation point, the first
 /// sub-step of each timings row, at the multiples of the longest step.
 #[test]
@@ -488,6 +489,16 @@ fn a_block_step_run_writes_a_row_per_synchronisation_step() {
         serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
     assert_eq!(sum(cs), summary["steps"].as_u64().unwrap());
     assert_eq!(sum(cu), summary["particle_updates"].as_u64().unwrap());
+    assert_eq!(summary["time_steps"], "block");
+    // The bins at the end hold every particle, longest steps first.
+    let bins = summary["time_bins"].as_array().unwrap();
+    let held: u64 = bins.iter().map(|b| b["particles"].as_u64().unwrap()).sum();
+    assert_eq!(held, summary["particles"].as_u64().unwrap());
+    let dts: Vec<f64> = bins.iter().map(|b| b["dt"].as_f64().unwrap()).collect();
+    assert!(
+        dts.windows(2).all(|w| w[0] > w[1]) && dts[0] <= 0.05 / 8.0,
+        "{dts:?}"
+    );
     assert!(
         trows.iter().any(|r| r[cs] != "1"),
         "some row of several sub-steps"
@@ -503,4 +514,87 @@ fn a_block_step_run_writes_a_row_per_synchronisation_step() {
         let m = t / (0.05 / 8.0);
         assert!((m - m.round()).abs() < 1e-9, "row {k}: t = {t}");
     }
+}
+
+/// Block time steps: a snapshot asked for at t = 0.0123, inside a
+/// sub-step, holds that time exactly, and positions where the drift puts
+/// them then: on the line between the states at the sub-step's ends
+/// (snapshots of every sub-step of the same run, which is the same with
+/// or without them).
+#[test]
+fn a_block_step_snapshot_lands_at_the_requested_time() {
+    use sph_io::{FieldData, H5Part, Selection, SnapshotReader};
+    let dir = scratch("sedov-block-snapshot-at");
+    let t_out = 0.0123;
+    let run = |name: &str, extra: &[&str]| {
+        let mut args = vec![
+            "sedov",
+            "-n",
+            "12",
+            "-q",
+            "--time-steps",
+            "block",
+            "--end-time",
+            "0.05",
+            "--snapshot-fields",
+            "id,x,y,z",
+            "--out",
+        ];
+        let out = dir.join(name);
+        args.push(s(&out));
+        args.extend_from_slice(extra);
+        common::ok(&args);
+        out
+    };
+    let every = run("every", &["--snapshot-every-steps", "1"]);
+    let at = run("at", &["--snapshot-at", "0.0123"]);
+    let conserved = |d: &PathBuf| std::fs::read(d.join("conserved.csv")).unwrap();
+    assert!(
+        conserved(&every) == conserved(&at),
+        "snapshots changed the run"
+    );
+    let snaps = |d: &PathBuf| -> Vec<PathBuf> {
+        let mut v: Vec<PathBuf> = std::fs::read_dir(d.join("snapshots"))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .collect();
+        v.sort();
+        v
+    };
+    let read = |p: &PathBuf| H5Part.read_step(p, 0, &Selection::All).unwrap();
+    let got = snaps(&at);
+    assert_eq!(got.len(), 1, "{got:?}");
+    let mid = read(&got[0]);
+    assert_eq!(mid.time, t_out);
+    // The sub-step holding t_out, from the every-step snapshots.
+    let all: Vec<_> = snaps(&every).iter().map(read).collect();
+    let k = all.iter().position(|s| s.time >= t_out).unwrap();
+    let (a, b) = (&all[k - 1], &all[k]);
+    assert!(
+        a.time < t_out && mid.step == b.step,
+        "{} {} {}",
+        a.time,
+        b.time,
+        mid.step
+    );
+    let w = (t_out - a.time) / (b.time - a.time);
+    let f64s = |s: &sph_io::Snapshot, n: &str| match s.field(n) {
+        Some(FieldData::F64(v)) => v.clone(),
+        _ => panic!("no {n}"),
+    };
+    assert!(a.field("id") == mid.field("id") && b.field("id") == mid.field("id"));
+    let mut worst: f64 = 0.0;
+    for c in ["x", "y", "z"] {
+        let (xa, xb, xm) = (f64s(a, c), f64s(b, c), f64s(&mid, c));
+        for i in 0..xm.len() {
+            if (xb[i] - xa[i]).abs() > 0.5 {
+                continue; // wrapped across the periodic box in the sub-step
+            }
+            worst = worst.max((xm[i] - (xa[i] + w * (xb[i] - xa[i]))).abs());
+        }
+    }
+    assert!(
+        worst < 1e-14,
+        "largest departure from the drift line {worst:e}"
+    );
 }

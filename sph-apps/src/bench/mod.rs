@@ -21,16 +21,18 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// Columns of `bench.csv`, in order.
-pub const COLUMNS: [&str; 21] = [
+pub const COLUMNS: [&str; 23] = [
     "case",
     "scheme",
     "kernel",
+    "time_steps",
     "N",
     "side",
     "ranks",
     "threads",
     "repeat",
     "steps",
+    "particle_updates",
     "t_end",
     "wall_s",
     "particle_steps_per_s",
@@ -57,6 +59,9 @@ pub struct Row {
     pub scheme: String,
     /// Kernel.
     pub kernel: String,
+    /// Time-step mode (`global`, `block`, `kdk`; empty in a reference
+    /// file without the column: taken as global).
+    pub time_steps: String,
     /// Particles.
     #[serde(rename = "N")]
     pub n: u64,
@@ -68,8 +73,11 @@ pub struct Row {
     pub threads: u64,
     /// Repeat index (0-based).
     pub repeat: u64,
-    /// Steps run.
+    /// Steps run (sub-steps under block time steps).
     pub steps: u64,
+    /// Particle updates (particles times steps in a global run; 0 when
+    /// unknown).
+    pub particle_updates: u64,
     /// Time reached.
     pub t_end: f64,
     /// Wall-clock seconds of the time-step loop.
@@ -107,24 +115,31 @@ impl Row {
         }
     }
 
-    /// The series the row belongs to: case, scheme, kernel.
+    /// The series the row belongs to: case, scheme, kernel, and the
+    /// time-step mode unless global.
     pub fn series(&self) -> String {
-        format!("{} {} {}", self.case, self.scheme, self.kernel)
+        let s = format!("{} {} {}", self.case, self.scheme, self.kernel);
+        match self.time_steps.as_str() {
+            "" | "global" => s,
+            mode => format!("{s} {mode}"),
+        }
     }
 
     /// The row's CSV line (full precision, in [`COLUMNS`] order).
     pub fn csv(&self) -> String {
         format!(
-            "{},{},{},{},{},{},{},{},{},{:e},{:e},{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{:e},{:e},{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{}",
             self.case,
             self.scheme,
             self.kernel,
+            self.time_steps,
             self.n,
             self.side,
             self.ranks,
             self.threads,
             self.repeat,
             self.steps,
+            self.particle_updates,
             self.t_end,
             self.wall_s,
             self.particle_steps_per_s,
@@ -164,12 +179,15 @@ impl Row {
             case: json["case"].as_str().ok_or_else(|| bad("case"))?.into(),
             scheme: scheme.into(),
             kernel: json["kernel"].as_str().ok_or_else(|| bad("kernel"))?.into(),
+            // Summaries from before the mode was recorded are global runs.
+            time_steps: json["time_steps"].as_str().unwrap_or("global").into(),
             n: u("particles")?,
             side,
             ranks: u("ranks")?,
             threads: u("threads")?,
             repeat,
             steps: u("steps")?,
+            particle_updates: json["particle_updates"].as_u64().unwrap_or(0),
             t_end: f("t_end")?,
             wall_s: f("wall_s")?,
             particle_steps_per_s: f("particle_steps_per_s")?,
@@ -249,12 +267,14 @@ pub fn read_csv(path: &Path) -> Result<Vec<Row>, AppError> {
             case: text("case"),
             scheme: text("scheme"),
             kernel: text("kernel"),
+            time_steps: text("time_steps"),
             n: whole("N")?,
             side: whole("side")?,
             ranks: whole("ranks")?,
             threads: whole("threads")?,
             repeat: whole("repeat")?,
             steps: whole("steps")?,
+            particle_updates: whole("particle_updates")?,
             t_end: num("t_end")?,
             wall_s: num("wall_s")?,
             particle_steps_per_s: num("particle_steps_per_s")?,
@@ -552,12 +572,14 @@ mod tests {
                 case: "c".into(),
                 scheme: "s".into(),
                 kernel: "k".into(),
+                time_steps: "global".into(),
                 n,
                 side: 0,
                 ranks: 1,
                 threads: 1,
                 repeat: 0,
                 steps: 1,
+                particle_updates: n,
                 t_end: 1.0,
                 wall_s: 1.0,
                 particle_steps_per_s: 1.0,

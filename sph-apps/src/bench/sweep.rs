@@ -1,11 +1,12 @@
 //! The runs of a bench: every combination of case, size, scheme, kernel,
-//! rank count and repeat as a fresh `sphexa run` process (so the peak RSS
+//! time-step mode, rank count and repeat as a fresh `sphexa run` process (so the peak RSS
 //! each reports is its own), read back as [`Row`]s from its
 //! `summary.json`.
 
 use super::Row;
 use crate::AppError;
-use sph_core::PRESETS;
+use sph_core::timestep::TimeSteps;
+use sph_core::{Choice, PRESETS};
 use sph_kernels::KernelChoice;
 use std::path::{Path, PathBuf};
 
@@ -21,6 +22,8 @@ pub struct Sweep {
     pub schemes: Vec<String>,
     /// Kernels.
     pub kernels: Vec<KernelChoice>,
+    /// Time-step modes (global, block, kdk).
+    pub time_steps: Vec<TimeSteps>,
     /// MPI rank counts (a run on more than one is started by `launcher`).
     pub ranks: Vec<usize>,
     /// Runs of each combination, at least 1.
@@ -71,75 +74,123 @@ impl Sweep {
         Ok(())
     }
 
-    /// Runs every combination with the `sphexa` binary `exe`, in order
-    /// (case, size, scheme, kernel, ranks, repeat), appending each run's
-    /// row to `rows`.
-    ///
-    /// # Errors
-    /// A run that cannot start or fails (with its error output), or a
-    /// summary that cannot be read.
-    pub fn run(&self, exe: &Path, rows: &mut Vec<Row>) -> Result<(), AppError> {
-        let launcher: Vec<&str> = self.launcher.split_whitespace().collect();
-        let total = self.cases.len()
-            * self.sizes.len()
-            * self.schemes.len()
-            * self.kernels.len()
-            * self.ranks.len()
-            * self.repeat as usize;
-        let mut k = 0;
+    /// Every combination, in order (case, size, scheme, kernel, time
+    /// steps, ranks, repeat).
+    fn combinations(&self) -> Vec<Combination<'_>> {
+        let mut v = Vec::new();
         for case in &self.cases {
             for &side in &self.sizes {
                 for scheme in &self.schemes {
                     for kernel in &self.kernels {
-                        for &ranks in &self.ranks {
-                            for repeat in 0..self.repeat {
-                                k += 1;
-                                let kernel_text = kernel.to_string();
-                                let dir = self.out.join("runs").join(format!(
-                                    "{case}_{scheme}_{}_{side}_r{ranks}_{repeat}",
-                                    kernel_text.replace(':', "")
-                                ));
-                                let mut cmd = if ranks > 1 {
-                                    let mut c = std::process::Command::new(launcher[0]);
-                                    c.args(&launcher[1..]);
-                                    c.arg("-n").arg(ranks.to_string()).arg(exe);
-                                    c
-                                } else {
-                                    std::process::Command::new(exe)
-                                };
-                                cmd.args(["run", case, "-n", &side.to_string(), "-q"])
-                                    .args(["--kernel", &kernel_text])
-                                    .arg("--out")
-                                    .arg(&dir);
-                                if scheme != "case" {
-                                    cmd.args(["--scheme", scheme]);
-                                }
-                                if let Some(t) = self.threads {
-                                    cmd.args(["--threads", &t.to_string()]);
-                                }
-                                if let Some(t) = self.end_time {
-                                    cmd.args(["--end-time", &t.to_string()]);
-                                }
-                                let what = format!(
-                                    "{case} --scheme {scheme} --kernel {kernel_text} -n {side} on {ranks} rank(s), repeat {repeat}"
-                                );
-                                let row = run_one(&mut cmd, &what, &dir, scheme, side, repeat)?;
-                                if !self.quiet {
-                                    eprintln!(
-                                        "[{k}/{total}] {what}: {} particles, {} steps, {:.2} s, L1 rho {:.4e} P {:.4e} |v| {:.4e}, peak RSS {:.0} MB",
-                                        row.n, row.steps, row.wall_s, row.l1_rho, row.l1_p, row.l1_v,
-                                        row.peak_rss_bytes as f64 / 1e6
-                                    );
-                                }
-                                rows.push(row);
+                        for &time_steps in &self.time_steps {
+                            for &ranks in &self.ranks {
+                                v.extend((0..self.repeat).map(|repeat| Combination {
+                                    case,
+                                    side,
+                                    scheme,
+                                    kernel,
+                                    time_steps,
+                                    ranks,
+                                    repeat,
+                                }));
                             }
                         }
                     }
                 }
             }
         }
+        v
+    }
+
+    /// Runs every combination with the `sphexa` binary `exe`, in order
+    /// (case, size, scheme, kernel, time steps, ranks, repeat), appending
+    /// each run's row to `rows`.
+    ///
+    /// # Errors
+    /// A run that cannot start or fails (with its error output), or a
+    /// summary that cannot be read.
+    pub fn run(&self, exe: &Path, rows: &mut Vec<Row>) -> Result<(), AppError> {
+        let launcher: Vec<&str> = self.launcher.split_whitespace().collect();
+        let all = self.combinations();
+        let total = all.len();
+        for (k, c) in all.into_iter().enumerate() {
+            let Combination {
+                case,
+                side,
+                scheme,
+                kernel,
+                time_steps,
+                ranks,
+                repeat,
+            } = c;
+            let kernel_text = kernel.to_string();
+            let mode = Choice::name(&time_steps);
+            // Global runs keep the folder names they had before the mode
+            // was a dimension.
+            let mode_dir = if time_steps == TimeSteps::Global {
+                String::new()
+            } else {
+                format!("_{mode}")
+            };
+            let dir = self.out.join("runs").join(format!(
+                "{case}_{scheme}_{}{mode_dir}_{side}_r{ranks}_{repeat}",
+                kernel_text.replace(':', "")
+            ));
+            let mut cmd = if ranks > 1 {
+                let mut c = std::process::Command::new(launcher[0]);
+                c.args(&launcher[1..]);
+                c.arg("-n").arg(ranks.to_string()).arg(exe);
+                c
+            } else {
+                std::process::Command::new(exe)
+            };
+            cmd.args(["run", case, "-n", &side.to_string(), "-q"])
+                .args(["--kernel", &kernel_text])
+                .args(["--time-steps", mode])
+                .arg("--out")
+                .arg(&dir);
+            if scheme != "case" {
+                cmd.args(["--scheme", scheme]);
+            }
+            if let Some(t) = self.threads {
+                cmd.args(["--threads", &t.to_string()]);
+            }
+            if let Some(t) = self.end_time {
+                cmd.args(["--end-time", &t.to_string()]);
+            }
+            let what = format!(
+                "{case} --scheme {scheme} --kernel {kernel_text} --time-steps {mode} -n {side} on {ranks} rank(s), repeat {repeat}"
+            );
+            let row = run_one(&mut cmd, &what, &dir, scheme, side, repeat)?;
+            if !self.quiet {
+                eprintln!(
+                    "[{}/{total}] {what}: {} particles, {} steps, {} updates, {:.2} s, L1 rho {:.4e} P {:.4e} |v| {:.4e}, peak RSS {:.0} MB",
+                    k + 1,
+                    row.n,
+                    row.steps,
+                    row.particle_updates,
+                    row.wall_s,
+                    row.l1_rho,
+                    row.l1_p,
+                    row.l1_v,
+                    row.peak_rss_bytes as f64 / 1e6
+                );
+            }
+            rows.push(row);
+        }
         Ok(())
     }
+}
+
+/// One run of a sweep.
+struct Combination<'a> {
+    case: &'a str,
+    side: usize,
+    scheme: &'a str,
+    kernel: &'a KernelChoice,
+    time_steps: TimeSteps,
+    ranks: usize,
+    repeat: u64,
 }
 
 /// Runs `cmd` (the run `what`, writing into `dir`) and reads its row.

@@ -2,11 +2,12 @@
 //! and the report ([`crate::bench::Report`]) are the library's.
 
 use super::parse::{
-    case_names, parse_kernel, parse_positive, parse_side, parse_steps, parse_threads,
+    case_names, choice, parse_kernel, parse_positive, parse_side, parse_steps, parse_threads,
 };
 use crate::bench::{read_csv, Report, Sweep};
 use crate::AppError;
 use clap::Args;
+use sph_core::timestep::TimeSteps;
 use sph_kernels::KernelChoice;
 use std::path::PathBuf;
 
@@ -37,6 +38,12 @@ pub(crate) struct BenchArgs {
     #[arg(long, value_name = "K1,K2,...", default_value = "sinc:6", value_delimiter = ',',
           value_parser = parse_kernel)]
     kernels: Vec<KernelChoice>,
+    /// Time-step modes, comma-separated (as `sphexa run --time-steps`):
+    /// `global,block` runs every combination both ways; bench.csv has the
+    /// mode and the particle updates of each run.
+    #[arg(long, value_name = "M1,M2,...", default_value = "global", value_delimiter = ',',
+          value_parser = choice::<TimeSteps>())]
+    time_steps: Vec<TimeSteps>,
     /// Worker threads per rank of each run (default: all cores).
     #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = parse_threads)]
     threads: Option<usize>,
@@ -80,6 +87,7 @@ pub(crate) fn bench(a: BenchArgs) -> Result<(), AppError> {
         sizes: a.sizes,
         schemes: a.schemes,
         kernels: a.kernels,
+        time_steps: a.time_steps,
         ranks: a.ranks,
         repeat: a.repeat,
         threads: a.threads,

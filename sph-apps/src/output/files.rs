@@ -7,7 +7,8 @@ use super::snapshot::{self as snapfile, Schedule};
 use crate::{checkpoint, AppError};
 use serde::Serialize;
 use sph_comm::{Communicator, ReduceOp};
-use sph_io::{Attr, Snapshot};
+use sph_core::hydro::predict_field;
+use sph_io::{Attr, FieldData, Snapshot};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -184,29 +185,44 @@ impl<C: Communicator> StepObserver<C> for FileOutputs {
         let p = view.particles;
         let comm = view.comm;
         let attrs = &files.attrs;
+        let time_due = files.snapshots.as_ref().and_then(|(_, s)| s.time_due(t));
         let snapshot_due = files
             .snapshots
             .as_mut()
             .is_some_and(|(_, s)| s.due(step, t));
         if snapshot_due {
+            // Block time steps: a snapshot asked for at a time holds the
+            // state at that time, predicted back within the sub-step just
+            // taken; a global run writes the state after the step.
+            let at = state
+                .block
+                .zip(time_due)
+                .map(|(b, t_out)| (b, t_out.clamp(view.report.t, t)));
+            let t_snap = at.map_or(t, |(_, t_out)| t_out);
+            let field = |name: &str| -> Result<FieldData, AppError> {
+                let mut data =
+                    snapfile::field(p, owned.clone(), name).expect("checked by set_outputs");
+                if let (Some((b, t_out)), FieldData::F64(v)) = (at, &mut data) {
+                    predict_field(p, owned.clone(), view.bbox, &b, t, t_out, name, v)?;
+                }
+                Ok(data)
+            };
             let seconds = match files.format {
                 SnapshotFormat::Swift { h_per_h } => {
                     let path = snapfile::numbered(&files.snapshot_dir, "snapshot", step)
                         .with_extension("hdf5");
-                    write_swift_snapshot(view, &path, h_per_h)?
+                    write_swift_snapshot(view, &path, h_per_h, t_snap, &field)?
                 }
                 SnapshotFormat::H5Part => {
                     let fields = &files.snapshots.as_ref().expect("snapshots on").0;
                     let mut snap =
-                        Snapshot::new(step, t, state.dt_prev, snapfile::box_spec(view.bbox));
+                        Snapshot::new(step, t_snap, state.dt_prev, snapfile::box_spec(view.bbox));
                     for (name, value) in attrs {
                         snap.set_attr(name, value.clone());
                     }
                     snap.set_attr("sphexa_kind", Attr::Str("snapshot".into()));
                     for name in fields {
-                        let data = snapfile::field(p, owned.clone(), name)
-                            .expect("checked by set_outputs");
-                        snap.set_field(name, data);
+                        snap.set_field(name, field(name)?);
                     }
                     let path = snapfile::numbered(&files.snapshot_dir, "snapshot", step);
                     snapfile::write(comm, &path, &snap)?
@@ -285,12 +301,18 @@ fn write_swift_snapshot<C: Communicator>(
     view: &StepView<'_, C>,
     path: &Path,
     h_per_h: f64,
+    time: f64,
+    field: &dyn Fn(&str) -> Result<FieldData, AppError>,
 ) -> Result<f64, AppError> {
     use sph_io::swift::{write_swift, SwiftParticles};
     let start = Instant::now();
     let (comm, p, owned) = (view.comm, view.particles, view.owned.clone());
-    let gather = |v: &[f64]| -> Result<Vec<f64>, AppError> {
-        let got = comm.all_gather_v(&v[owned.clone()])?;
+    // Every rank's owned values of a field, in rank order.
+    let gather = |name: &str| -> Result<Vec<f64>, AppError> {
+        let FieldData::F64(mine) = field(name)? else {
+            unreachable!("{name} is an f64 field")
+        };
+        let got = comm.all_gather_v(&mine)?;
         Ok((0..comm.size())
             .flat_map(|r| got.from_rank(r).to_vec())
             .collect())
@@ -298,22 +320,22 @@ fn write_swift_snapshot<C: Communicator>(
     let ids = comm.all_gather_v(&p.id[owned.clone()])?;
     let (lo, hi) = (view.bbox.lo(), view.bbox.hi());
     let mut gas = SwiftParticles {
-        x: gather(&p.x)?,
-        y: gather(&p.y)?,
-        z: gather(&p.z)?,
-        vx: gather(&p.vx)?,
-        vy: gather(&p.vy)?,
-        vz: gather(&p.vz)?,
-        m: gather(&p.m)?,
-        h: gather(&p.h)?,
-        u: gather(&p.u)?,
+        x: gather("x")?,
+        y: gather("y")?,
+        z: gather("z")?,
+        vx: gather("vx")?,
+        vy: gather("vy")?,
+        vz: gather("vz")?,
+        m: gather("m")?,
+        h: gather("h")?,
+        u: gather("u")?,
         id: (0..comm.size())
             .flat_map(|r| ids.from_rank(r).to_vec())
             .collect(),
-        rho: Some(gather(&p.rho)?),
-        p: Some(gather(&p.p)?),
+        rho: Some(gather("rho")?),
+        p: Some(gather("p")?),
         box_size: std::array::from_fn(|k| hi[k] - lo[k]),
-        time: view.state.t,
+        time,
         units: None,
     };
     gas.shift(lo.map(|l| -l));

@@ -152,6 +152,24 @@ impl Schedule {
         }
     }
 
+    /// The earliest requested time (a multiple of `every_time` or an entry
+    /// of `at`) that `t` reaches and that is not done yet: the time a
+    /// block-step run's snapshot is predicted to. Ask before
+    /// [`due`](Self::due), which marks it done.
+    pub fn time_due(&self, t: f64) -> Option<f64> {
+        let by_time = (self.every_time.is_some() && t >= self.next_time * (1.0 - 1e-12))
+            .then_some(self.next_time);
+        let by_list = self
+            .at
+            .get(self.next_at)
+            .copied()
+            .filter(|&a| t >= a * (1.0 - 1e-12));
+        match (by_time, by_list) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
     /// Whether an output is due after `step` (reaching time `t`); advances
     /// past every time reached.
     pub fn due(&mut self, step: u64, t: f64) -> bool {

@@ -53,6 +53,7 @@ macro_rules! hydro_state {
 mod block;
 mod buffers;
 mod config;
+mod predict;
 mod report;
 mod stages;
 mod stir;
@@ -60,6 +61,7 @@ mod stir;
 use block::BlockState;
 use buffers::StepBuffers;
 pub use config::HydroConfig;
+pub use predict::{predict_field, PREDICTED};
 pub use report::{
     BlockRun, DomainStepStats, RunState, Stage, StageTimes, StepReport, BIN_OFFSETS, STAGES,
 };
