@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# The SWIFT table of docs/performance.md: swift-side-by-side at 30/40/50 with ours
+# (block steps, best), then ours alone at smaller sizes, 2 threads, one run at a time.
+# Usage: swift_table.sh SWIFT_BIN OURS_BIN (SEDOV_SOLUTION set; PYTHON with h5py).
+set -u
+export PYTHON=${PYTHON:-python3}
+SW=$(realpath "${1:?usage: swift_table.sh SWIFT_BIN OURS_BIN}"); OURS=$(realpath "${2:?usage: swift_table.sh SWIFT_BIN OURS_BIN}")
+export SEDOV_SOLUTION=${SEDOV_SOLUTION:?set SEDOV_SOLUTION to the C++ sedov_solution tool (README.md)}
+SBS=$(cd "$(dirname "$0")" && pwd)/swift-side-by-side
+lscpu | grep "Model name"; date
+for n in 30 40 50; do $OURS run sedov -n $n --steps 1 -q --out /tmp/warm$n >/dev/null 2>&1; done
+for n in 30 40 50; do
+  bash $SBS $SW $OURS sedov $n --time-steps block --scheme best --first-step criteria
+done
+ours() { # n, label, options...
+  n=$1; label=$2; shift 2
+  $OURS run sedov -n $n --steps 1 -q --out /tmp/warm$n >/dev/null 2>&1
+  /usr/bin/time -v -o /tmp/ot.txt $OURS run sedov -n $n --end-time 0.05 --threads 2 -q --out /tmp/ours-$label-$n "$@" >/dev/null 2>&1 || { echo "$label $n failed"; return; }
+  python3 - /tmp/ours-$label-$n/summary.json /tmp/ot.txt $label $n <<'PY'
+import json,sys,re
+d=json.load(open(sys.argv[1])); t=open(sys.argv[2]).read()
+w=re.search(r'Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): (\S+)',t).group(1).split(':')
+s=0.0
+for x in w: s=s*60+float(x)
+rss=int(re.search(r'Maximum resident set size \(kbytes\): (\d+)',t).group(1))/1024
+l=d['l1']
+print(f"ours {sys.argv[3]:12s} {sys.argv[4]}^3: L1 {l['rho']:.4f} / {l['p']:.4f} / {l['v']:.4f}, wall {s:.2f} s, {d['steps']} steps, {d['particle_updates']/1e6:.3f} M updates, RSS {rss:.0f} MiB")
+PY
+}
+for n in 20 22 24 26 28 30 34 40 46; do ours $n best-block --time-steps block --scheme best --first-step criteria; done
+for n in 30 40 50; do ours $n paper-block --time-steps block --first-step criteria; done
+for n in 30 40; do ours $n paper-global --first-step criteria; done
+date
