@@ -20,7 +20,8 @@
 //!   particles of the untouched state sit in the unshocked inflow, which
 //!   it describes exactly (inside 1.5 shock radii it scores 11.1 / 0.273
 //!   on P and |v| against the run's 12.0 / 0.289 at 37^3).
-//! - Energy conserved to 1e-3, momentum to 1e-12.
+//! - Energy conserved to 1e-3, momentum to 1e-12 (1e-6 under block time
+//!   steps, the second test).
 
 use sph_apps::cases::Reference;
 use sph_apps::simulation::Stop;
@@ -75,13 +76,15 @@ fn untouched(p: &Particles, rho0: f64) -> HashMap<String, Vec<f64>> {
 }
 
 /// The run's summary, its L1 near the shock and the untouched state's.
-fn run(side: usize) -> (Summary, [f64; 3], [f64; 3]) {
-    let scene = sph_validation::scene("noh", side);
+fn run(side: usize, time_steps: sph_core::TimeSteps) -> (Summary, [f64; 3], [f64; 3]) {
+    let mut scene = sph_validation::scene("noh", side);
+    scene.config.time_steps = time_steps;
     let reference = scene.reference.clone().expect("noh has a reference");
     // The inflow's density at t = 0 is the particle set's rho0.
     let rho0 = reference.state(1.0, 0.0).rho;
     let null = l1_near_shock(&reference, &untouched(&scene.particles, rho0));
-    let out = sph_validation::scratch(&format!("noh{side}"));
+    let name = sph_core::Choice::name(&time_steps);
+    let out = sph_validation::scratch(&format!("noh{side}-{name}"));
     let s = sph_validation::run_writing_particles(scene, Stop::Time(T_END), &out);
     let l1 = l1_near_shock(&reference, &sph_validation::read_particles(&out));
     println!(
@@ -94,39 +97,60 @@ fn run(side: usize) -> (Summary, [f64; 3], [f64; 3]) {
 #[test]
 fn noh_reaches_the_plateau_at_two_resolutions() {
     for side in [37, 44] {
-        let (s, l1, null) = run(side);
-        let target = s.plateau_density_ref.unwrap();
-        let plateau = s.plateau_density.unwrap();
+        let (s, l1, null) = run(side, sph_core::TimeSteps::Global);
+        check(side, &s, l1, null, 1e-12);
+    }
+}
+
+/// The same under block time steps (issue 41), at the same bounds but
+/// momentum: a pair's two forces are evaluated at different times, so it
+/// holds to 1e-6 (measured 2.7e-8 and 6.7e-8). Measured (2026-12-04):
+/// plateau 123.7 / 122.4 (+2.1% / +0.4%), shock 0.0958 / 0.0999, energy
+/// drift 1.7e-4 / 1.2e-4, L1 near the shock 25.36 / 13.88 / 0.320 and
+/// 25.95 / 13.49 / 0.304 (lower than the global runs'), particle updates
+/// 0.28 / 0.27 of the global run's (4.92 M against 17.4 M, 9.46 M
+/// against 35.3 M; wall 0.55x / 0.51x).
+#[test]
+fn noh_reaches_the_plateau_under_block_time_steps() {
+    for side in [37, 44] {
+        let (s, l1, null) = run(side, sph_core::TimeSteps::Block);
+        check(side, &s, l1, null, 1e-6);
+    }
+}
+
+/// The bounds of the module's text, momentum to `momentum`.
+fn check(side: usize, s: &Summary, l1: [f64; 3], null: [f64; 3], momentum: f64) {
+    let target = s.plateau_density_ref.unwrap();
+    let plateau = s.plateau_density.unwrap();
+    assert!(
+        (plateau / target - 1.0).abs() < 0.05,
+        "{side}^3: plateau {plateau} = {} x 64 rho0",
+        plateau / target
+    );
+    let (r, r_ref) = (s.shock_radius.unwrap(), s.shock_radius_ref.unwrap());
+    assert!((r_ref - 0.1).abs() < 1e-12, "reference shock at {r_ref}");
+    assert!(
+        (r / r_ref - 1.0).abs() < 0.1,
+        "{side}^3: shock at {r}, reference {r_ref}"
+    );
+    assert!(
+        s.energy_rel_drift.abs() < 1e-3,
+        "{side}^3: energy drift {:e}",
+        s.energy_rel_drift
+    );
+    assert!(
+        s.momentum_rel_drift < momentum,
+        "{side}^3: momentum drift {:e}",
+        s.momentum_rel_drift
+    );
+    for k in 0..3 {
         assert!(
-            (plateau / target - 1.0).abs() < 0.05,
-            "{side}^3: plateau {plateau} = {} x 64 rho0",
-            plateau / target
-        );
-        let (r, r_ref) = (s.shock_radius.unwrap(), s.shock_radius_ref.unwrap());
-        assert!((r_ref - 0.1).abs() < 1e-12, "reference shock at {r_ref}");
-        assert!(
-            (r / r_ref - 1.0).abs() < 0.1,
-            "{side}^3: shock at {r}, reference {r_ref}"
+            l1[k] < L1_MAX[k],
+            "{side}^3: L1 near the shock {l1:?} against bounds {L1_MAX:?}"
         );
         assert!(
-            s.energy_rel_drift.abs() < 1e-3,
-            "{side}^3: energy drift {:e}",
-            s.energy_rel_drift
+            null[k] > L1_MAX[k],
+            "{side}^3: the untouched state's L1 {null:?} passes the bounds {L1_MAX:?}"
         );
-        assert!(
-            s.momentum_rel_drift < 1e-12,
-            "{side}^3: momentum drift {:e}",
-            s.momentum_rel_drift
-        );
-        for k in 0..3 {
-            assert!(
-                l1[k] < L1_MAX[k],
-                "{side}^3: L1 near the shock {l1:?} against bounds {L1_MAX:?}"
-            );
-            assert!(
-                null[k] > L1_MAX[k],
-                "{side}^3: the untouched state's L1 {null:?} passes the bounds {L1_MAX:?}"
-            );
-        }
     }
 }
