@@ -18,14 +18,32 @@ use sph_apps::simulation::Stop;
 
 #[test]
 fn wind_shock_runs_to_two_kelvin_helmholtz_times() {
+    runs_to_two_kelvin_helmholtz_times(sph_core::TimeSteps::Global, 1e-12);
+}
+
+/// The same under block time steps (issue 41): momentum to 1e-4 (a
+/// pair's two forces are evaluated at different times; measured 5.6e-5,
+/// 4.4e-5 and 3.8e-5 at 48, 64 and 80 particles per unit length).
+/// Measured at 64 (2026-12-04): 357 sub-steps, 1.33 M particle updates
+/// against the global run's 4.80 M (0.28), 4.8 s against 10.6 s, energy
+/// drift -8.4e-5, the same survival curve's ends (0.851 -> 0).
+#[test]
+fn wind_shock_runs_under_block_time_steps() {
+    runs_to_two_kelvin_helmholtz_times(sph_core::TimeSteps::Block, 1e-4);
+}
+
+/// The module's checks under `time_steps`, momentum to `momentum`.
+fn runs_to_two_kelvin_helmholtz_times(time_steps: sph_core::TimeSteps, momentum: f64) {
     let case = cases::lookup("wind-shock").unwrap();
-    let scene = sph_validation::scene(case.name(), case.default_side());
+    let mut scene = sph_validation::scene(case.name(), case.default_side());
+    scene.config.time_steps = time_steps;
     let t_end = 2.0 * cases::wind_shock::TAU_KH;
-    let out = sph_validation::scratch("wind-shock");
+    let name = sph_core::Choice::name(&time_steps);
+    let out = sph_validation::scratch(&format!("wind-shock-{name}"));
     let s = sph_validation::run_writing_particles(scene, Stop::Time(t_end), &out);
     assert!((s.t_end - t_end).abs() < 1e-9, "stopped at {}", s.t_end);
     assert!(s.energy_rel_drift.abs() < 1e-3, "{}", s.energy_rel_drift);
-    assert!(s.momentum_rel_drift < 1e-12, "{}", s.momentum_rel_drift);
+    assert!(s.momentum_rel_drift < momentum, "{}", s.momentum_rel_drift);
 
     let p = sph_validation::read_particles(&out);
     for (k, (&u, &rho)) in p["u"].iter().zip(&p["rho"]).enumerate() {
