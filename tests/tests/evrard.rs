@@ -15,19 +15,17 @@
 //! bounce by 0.01 in time.
 
 use sph_apps::simulation::Stop;
+use sph_apps::Summary;
 
-#[test]
-fn evrard_30_energies_match_reference() {
-    let scene = sph_validation::scene("evrard", 30);
-    let out = sph_validation::scratch("evrard30");
-    let s = sph_validation::run(scene, Stop::Time(2.0), &out);
-
-    for t in [0.8, 1.0, 2.0] {
+/// E_kin, E_int and E_grav of run `s` (`label`) within `bound` (relative)
+/// of the reference at each of `times`.
+fn energies_match(s: &Summary, times: &[f64], bound: f64, label: &str) {
+    for &t in times {
         let e = s
             .energies
             .iter()
             .find(|e| (e.t - t).abs() < 1e-12)
-            .unwrap_or_else(|| panic!("no energies at t = {t}"));
+            .unwrap_or_else(|| panic!("{label}: no energies at t = {t}"));
         for (name, got, want) in [
             ("E_kin", e.e_kin, e.e_kin_ref),
             ("E_int", e.e_int, e.e_int_ref),
@@ -35,15 +33,24 @@ fn evrard_30_energies_match_reference() {
         ] {
             let rel = (got - want) / want;
             println!(
-                "t = {t}: {name} {got:.4} vs {want:.4} ({:+.1}%)",
+                "{label}: t = {t}: {name} {got:.4} vs {want:.4} ({:+.1}%)",
                 100.0 * rel
             );
             assert!(
-                rel.abs() < 0.075,
-                "t = {t}: {name} = {got}, reference {want}"
+                rel.abs() < bound,
+                "{label}, t = {t}: {name} = {got}, reference {want}"
             );
         }
     }
+}
+
+#[test]
+fn evrard_30_energies_match_reference() {
+    let scene = sph_validation::scene("evrard", 30);
+    let out = sph_validation::scratch("evrard30");
+    let s = sph_validation::run(scene, Stop::Time(2.0), &out);
+
+    energies_match(&s, &[0.8, 1.0, 2.0], 0.075, "30");
 
     // Total energy through the bounce, from conserved.csv.
     let text = std::fs::read_to_string(out.join("conserved.csv")).unwrap();
@@ -87,28 +94,7 @@ fn evrard_block_steps_energies_match_reference() {
         scene.config.time_steps = sph_core::TimeSteps::Block;
         let out = sph_validation::scratch(&format!("evrard{side}-block"));
         let s = sph_validation::run(scene, Stop::Time(1.0), &out);
-        for t in [0.8, 1.0] {
-            let e = s
-                .energies
-                .iter()
-                .find(|e| (e.t - t).abs() < 1e-12)
-                .unwrap_or_else(|| panic!("no energies at t = {t}"));
-            for (name, got, want) in [
-                ("E_kin", e.e_kin, e.e_kin_ref),
-                ("E_int", e.e_int, e.e_int_ref),
-                ("E_grav", e.e_grav, e.e_grav_ref),
-            ] {
-                let rel = (got - want) / want;
-                println!(
-                    "{side}: t = {t}: {name} {got:.4} vs {want:.4} ({:+.1}%)",
-                    100.0 * rel
-                );
-                assert!(
-                    rel.abs() < 0.05,
-                    "{side}, t = {t}: {name} = {got}, reference {want}"
-                );
-            }
-        }
+        energies_match(&s, &[0.8, 1.0], 0.05, &side.to_string());
         println!(
             "{side}: drift {:.2e}, {} updates in {} sub-steps of {} particles",
             s.energy_rel_drift, s.particle_updates, s.steps, s.particles
