@@ -785,8 +785,8 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 // Density by its rate, and h with it so that the kernel
                 // keeps its mass (h^3 rho constant).
                 if dlnrho[i] != 0.0 {
-                    *rho *= (dlnrho[i] * dt).exp();
-                    *h *= (-dlnrho[i] * dt / 3.0).exp();
+                    *rho *= density_drift(dlnrho[i], dt);
+                    *h *= h_drift(dlnrho[i], dt);
                 }
                 Ok::<f64, CoreError>(moved)
             })
@@ -803,6 +803,21 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         }
         Ok(self.domain.comm().all_reduce_scalar(moved, ReduceOp::Max))
     }
+}
+
+/// The factor the drift applies to a density over `dt` at the rate
+/// `r = d ln rho / dt` of the particle's last step (also what a snapshot
+/// between sub-steps is predicted with: `predict.rs`).
+#[inline]
+pub(super) fn density_drift(r: f64, dt: f64) -> f64 {
+    (r * dt).exp()
+}
+
+/// The factor for the smoothing length that goes with
+/// [`density_drift`]: the kernel keeps its mass (`h^3 rho` constant).
+#[inline]
+pub(super) fn h_drift(r: f64, dt: f64) -> f64 {
+    (-r * dt / 3.0).exp()
 }
 
 /// The smallest and largest neighbour count over the active owned

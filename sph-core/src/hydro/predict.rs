@@ -8,6 +8,7 @@
 //! inside its current step, so the state at any time of the sub-step just
 //! taken follows from the current one by the same formulas, run back.
 
+use super::block::{density_drift, h_drift};
 use super::BlockRun;
 use crate::timeline::{Bin, TimeLine};
 use crate::{CoreError, Particles};
@@ -97,8 +98,8 @@ pub fn predict_field(
         *v = match field {
             "vx" | "vy" | "vz" => *v + a[axis(&field[1..]).expect("an axis")][i] * dt,
             "u" => *v + p.du[i] * dt,
-            "rho" => *v * (p.dlnrho[i] * dt).exp(),
-            "h" => *v * (-p.dlnrho[i] * dt / 3.0).exp(),
+            "rho" => *v * density_drift(p.dlnrho[i], dt),
+            "h" => *v * h_drift(p.dlnrho[i], dt),
             _ => {
                 let c = axis(field).expect("a position");
                 let step = line.dt(Bin(p.bin[i] as u8));
