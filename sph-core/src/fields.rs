@@ -80,6 +80,12 @@ pub enum Needs {
     /// Block time steps with generalised or pressure-energy volumes: the
     /// volume elements inactive neighbours hold.
     BlockVolumes,
+    /// Block time steps with the Balsara limiter: the limited viscosity
+    /// strength inactive neighbours hold.
+    BlockBalsara,
+    /// Block time steps with viscosity cleaning: the velocity gradients
+    /// inactive neighbours hold.
+    BlockCleaning,
 }
 
 /// Which optional fields a run holds (one flag per [`Needs`] condition
@@ -104,6 +110,11 @@ pub struct FieldSet {
     /// Volume elements other than `m / rho` (generalised or
     /// pressure-energy volumes): held fields under block time steps.
     pub volumes: bool,
+    /// The Balsara limiter: its strengths are held under block time steps.
+    pub balsara: bool,
+    /// Viscosity cleaning: its velocity gradients are held under block
+    /// time steps.
+    pub cleaning: bool,
 }
 
 impl FieldSet {
@@ -116,6 +127,8 @@ impl FieldSet {
         eos_ref: false,
         block: false,
         volumes: false,
+        balsara: false,
+        cleaning: false,
     };
 }
 
@@ -130,6 +143,8 @@ impl Default for FieldSet {
             eos_ref: false,
             block: false,
             volumes: false,
+            balsara: false,
+            cleaning: false,
         }
     }
 }
@@ -147,6 +162,8 @@ impl FieldSet {
             Needs::BlockSteps => self.block,
             Needs::BlockSwitches => self.block && self.alpha,
             Needs::BlockVolumes => self.block && self.volumes,
+            Needs::BlockBalsara => self.block && self.balsara,
+            Needs::BlockCleaning => self.block && self.cleaning,
         }
     }
 
@@ -160,6 +177,8 @@ impl FieldSet {
             eos_ref: self.eos_ref || other.eos_ref,
             block: self.block || other.block,
             volumes: self.volumes || other.volumes,
+            balsara: self.balsara || other.balsara,
+            cleaning: self.cleaning || other.cleaning,
         }
     }
 }
@@ -286,7 +305,8 @@ const fn kept_by_blocks(mut f: Field) -> Field {
 
 use Kind::{History, Identity, Persistent};
 use Needs::{
-    Always, BlockSteps, BlockSwitches, BlockVolumes, GradH, Gravity, Iad, ReferencedEos, Switches,
+    Always, BlockBalsara, BlockCleaning, BlockSteps, BlockSwitches, BlockVolumes, GradH, Gravity,
+    Iad, ReferencedEos, Switches,
 };
 
 const DERIVED: Kind = Kind::Derived { fill: 0.0 };
@@ -371,6 +391,14 @@ pub struct Particles {
     pub xm: Vec<f64>,
     /// The normalisation `k` of the volume elements (as `xm`).
     pub kx: Vec<f64>,
+    /// The Balsara-limited viscosity strength, held for inactive
+    /// neighbours (block time steps with the limiter; global runs keep it
+    /// in the step buffers).
+    pub alpha_eff: Vec<f64>,
+    /// The symmetric velocity gradient `G_xx, G_xy, G_xz, G_yy, G_yz,
+    /// G_zz` of viscosity cleaning, held for inactive neighbours (block
+    /// time steps with cleaning; global runs keep it in the step buffers).
+    pub grad_v: [Vec<f64>; 6],
     /// The optional fields held (on every rank alike, even one that holds
     /// no particles right now, so that messages agree).
     pub(crate) fields: FieldSet,
@@ -403,6 +431,13 @@ pub const FIELDS: &[Field] = &[
     kept_by_blocks(doc(field!("div_v", None, DERIVED, BlockSwitches, F64, div_v), "velocity divergence (block time steps with switches)")),
     kept_by_blocks(doc(field!("xm", None, DERIVED, BlockVolumes, F64, xm), "volume element X (block time steps, generalised volumes)")),
     kept_by_blocks(doc(field!("kx", None, DERIVED, BlockVolumes, F64, kx), "volume normalisation k (block time steps, generalised volumes)")),
+    kept_by_blocks(doc(field!("alpha_eff", None, DERIVED, BlockBalsara, F64, alpha_eff), "Balsara-limited viscosity strength (block time steps)")),
+    kept_by_blocks(doc(field!("gv_xx", None, DERIVED, BlockCleaning, F64, grad_v[0]), "velocity gradient, xx (block time steps, viscosity cleaning)")),
+    kept_by_blocks(doc(field!("gv_xy", None, DERIVED, BlockCleaning, F64, grad_v[1]), "velocity gradient, symmetric xy (block time steps, viscosity cleaning)")),
+    kept_by_blocks(doc(field!("gv_xz", None, DERIVED, BlockCleaning, F64, grad_v[2]), "velocity gradient, symmetric xz (block time steps, viscosity cleaning)")),
+    kept_by_blocks(doc(field!("gv_yy", None, DERIVED, BlockCleaning, F64, grad_v[3]), "velocity gradient, yy (block time steps, viscosity cleaning)")),
+    kept_by_blocks(doc(field!("gv_yz", None, DERIVED, BlockCleaning, F64, grad_v[4]), "velocity gradient, symmetric yz (block time steps, viscosity cleaning)")),
+    kept_by_blocks(doc(field!("gv_zz", None, DERIVED, BlockCleaning, F64, grad_v[5]), "velocity gradient, zz (block time steps, viscosity cleaning)")),
     kept_by_blocks(doc(field!("rho", Some(("Densities", 0)), DERIVED, Always, F64, rho), "density")),
     kept_by_blocks(doc(field!("p", Some(("Pressures", 0)), DERIVED, Always, F64, p), "pressure")),
     kept_by_blocks(doc(field!("c", Some(("SoundSpeeds", 0)), DERIVED, Always, F64, c), "sound speed")),
@@ -476,6 +511,8 @@ mod tests {
                 eos_ref: true,
                 block: true,
                 volumes: true,
+                balsara: true,
+                cleaning: true,
             },
         );
         for (k, f) in FIELDS.iter().enumerate() {
@@ -499,12 +536,13 @@ mod tests {
 
     #[test]
     fn the_table_covers_every_array_of_particles() {
-        // Each `Vec` is 24 bytes; Particles adds the FieldSet (5 flags,
-        // padded to 8). A new array without a table entry fails here.
+        // Each `Vec` is 24 bytes; Particles adds the FieldSet (its flags,
+        // padded to 8 bytes). A new array without a table entry fails here.
         let arrays = FIELDS.len();
+        let flags = std::mem::size_of::<FieldSet>().next_multiple_of(8);
         assert_eq!(
             std::mem::size_of::<Particles>(),
-            arrays * std::mem::size_of::<Vec<f64>>() + 8,
+            arrays * std::mem::size_of::<Vec<f64>>() + flags,
             "Particles has an array the field table does not list"
         );
     }

@@ -66,12 +66,16 @@ impl Particles {
     /// density rate, zero until its first step) and holds the derived
     /// fields inactive particles keep. Runs whose [`FieldSet`] comes from
     /// a block-step configuration hold them from the start.
-    /// `volumes`: the scheme's volume elements are not `m / rho`, so `X`
-    /// and `k` are held too (as with viscosity switches `div v`).
-    pub fn enable_block_steps(&mut self, volumes: bool) {
+    /// `scheme`: the scheme's fields ([`Scheme::fields`](crate::Scheme::fields));
+    /// where its volume elements are not `m / rho`, `X` and `k` are held
+    /// too, with the Balsara limiter its strengths, with viscosity
+    /// cleaning the velocity gradients (as with switches `div v`).
+    pub fn enable_block_steps(&mut self, scheme: FieldSet) {
         let old = self.fields;
         self.fields.block = true;
-        self.fields.volumes |= volumes;
+        self.fields.volumes |= scheme.volumes;
+        self.fields.balsara |= scheme.balsara;
+        self.fields.cleaning |= scheme.cleaning;
         let n = self.len();
         for f in fields::held(self.fields).filter(|f| !old.holds(f.needs)) {
             if let Column::F64(_, get) = f.column {

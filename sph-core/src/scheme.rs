@@ -411,6 +411,8 @@ impl Scheme {
             eos_ref: false,
             block: false,
             volumes: self.volume != Volume::Mass,
+            balsara: self.balsara,
+            cleaning: self.av_cleaning,
         }
     }
 }

@@ -87,8 +87,8 @@ impl crate::Choice for TimeSteps {
             }
             TimeSteps::Block => {
                 "Each particle its own power-of-two fraction of a longest step, with a limiter \
-                 (block time steps; for now without gravity, driving, pressure-energy volumes, \
-                 the Balsara limiter or viscosity cleaning)"
+                 (block time steps; every scheme and equation of state, not turbulence \
+                 driving yet)"
             }
             TimeSteps::Kdk => {
                 "The block-step integrator with every particle in the smallest bin any needs \

@@ -21,12 +21,15 @@
 //!   perturbed ones:
 //!   perturbed, the test measures the ensemble, not one path; a change of
 //!   rounding is one more 1e-16 perturbation of an already perturbed state.
-//! - Measured (2 threads, perturbed): 0.0208 at 16, 0.0166 at 32 with
-//!   `contact`; 0.0874 at 16 with the paper's scheme (volumes m / rho,
-//!   IAD). Bounds: 0.025 at 16 and 0.02 at 32 (the measurements plus
-//!   20%, against a spread of realisations of 0.2%), and the error
-//!   falling from 16 to 32 by at least 10% (measured: 20%). The paper's
-//!   scheme must exceed the 16 bound by 2x.
+//! - Measured (2 threads, perturbed), as the mean over the steps' rows:
+//!   0.0208 at 16, 0.0166 at 32 with `contact`; 0.0874 at 16 with the
+//!   paper's scheme (volumes m / rho, IAD). Bounds: 0.025 at 16 and 0.02
+//!   at 32 (the measurements plus 20%, against a spread of realisations
+//!   of 0.2%), and the error falling from 16 to 32 by at least 10%
+//!   (measured: 20%). The paper's scheme must exceed the 16 bound by 2x.
+//!   The test now takes the time mean (each row weighted by its step, as
+//!   block time steps' sub-steps differ in length; 2026-12-05): 0.0218
+//!   and 0.0170, the paper's 0.0901; the bounds stay.
 //!
 //! The validation brief's goal (`docs/cases.md`), v_rms / c < 1e-2 at t = 1 and 32 per side, holds
 //! only in the exact lattice's realisation; the test prints the value at
@@ -35,7 +38,7 @@
 use sph_apps::cases::{isobaric_cube, Curve, Scheme, SchemeOverrides};
 use sph_apps::rng::SplitMix64;
 use sph_apps::simulation::Stop;
-use sph_core::Particles;
+use sph_core::{Particles, TimeSteps};
 
 /// Bounds on the time-mean of v_rms / c at 16 and 32 per side.
 const BOUND_16: f64 = 0.025;
@@ -67,13 +70,14 @@ const NOISE: Curve = Curve {
 /// The time-mean of v_rms / c over the steps to t = 1, its value at
 /// t = 1, and the mean densities of the core (max-norm radius < 0.15) and
 /// of the thin gas far from the cube (> 0.35).
-fn run(side: usize, paper: bool) -> (f64, f64, f64, f64) {
+fn run(side: usize, paper: bool, time_steps: TimeSteps, momentum: f64) -> (f64, f64, f64, f64) {
     let overrides = SchemeOverrides {
         preset: paper.then_some(Scheme::PAPER),
         ..Default::default()
     };
     let mut scene = sph_validation::scene_with("isobaric-cube", side, &overrides);
     scene.curve = Some(NOISE);
+    scene.config.time_steps = time_steps;
     let spacing = 1.0 / side as f64;
     let mut rng = SplitMix64(0x150BA1C ^ side as u64);
     let p = &mut scene.particles;
@@ -82,21 +86,36 @@ fn run(side: usize, paper: bool) -> (f64, f64, f64, f64) {
             c[i] += PERTURBATION * spacing * (rng.uniform() - 0.5);
         }
     }
-    let name = format!("isobaric{side}{}", if paper { "-paper" } else { "" });
+    let name = format!(
+        "isobaric{side}{}-{time_steps:?}",
+        if paper { "-paper" } else { "" }
+    );
     let out = sph_validation::scratch(&name);
     let s = sph_validation::run_writing_particles(scene, Stop::Time(1.0), &out);
     assert!(s.energy_rel_drift.abs() < 1e-3, "{}", s.energy_rel_drift);
-    assert!(s.momentum_rel_drift < 1e-12, "{}", s.momentum_rel_drift);
+    assert!(s.momentum_rel_drift < momentum, "{}", s.momentum_rel_drift);
 
     let text = std::fs::read_to_string(out.join("curve.csv")).expect("curve.csv");
-    let noise: Vec<f64> = text
+    // (t, v_rms / c) after each step.
+    let noise: Vec<(f64, f64)> = text
         .lines()
         .skip(1)
-        .map(|l| l.rsplit(',').next().unwrap().parse().expect("a number"))
+        .map(|l| {
+            let f: Vec<f64> = l.split(',').map(|v| v.parse().expect("a number")).collect();
+            (f[1], f[f.len() - 1])
+        })
         .collect();
     assert!(noise.len() as u64 >= s.steps, "{} rows", noise.len());
-    let mean = noise.iter().sum::<f64>() / noise.len() as f64;
-    let last = *noise.last().unwrap();
+    // The time mean: each row stands for the step that ended there (block
+    // time steps' sub-steps differ in length).
+    let mut t_prev = 0.0;
+    let mut mean = 0.0;
+    for &(t, v) in &noise {
+        mean += v * (t - t_prev);
+        t_prev = t;
+    }
+    mean /= t_prev;
+    let last = noise.last().unwrap().1;
 
     let p = sph_validation::read_particles(&out);
     let (mut core, mut n_core, mut far, mut n_far) = (0.0, 0, 0.0, 0);
@@ -122,8 +141,31 @@ fn run(side: usize, paper: bool) -> (f64, f64, f64, f64) {
 
 #[test]
 fn isobaric_cube_stays_put() {
-    let (coarse, _, _, _) = run(16, false);
-    let (fine, _, core, far) = run(32, false);
+    stays_put(TimeSteps::Global, 1e-12);
+    // A scheme known to be noisy at the contact fails the bound.
+    let (paper, _, _, _) = run(16, true, TimeSteps::Global, 1e-12);
+    assert!(
+        paper > 2.0 * BOUND_16,
+        "the paper's scheme: mean v_rms / c {paper} at 16, within reach of the bound {BOUND_16}"
+    );
+}
+
+/// The same bounds under block time steps (issue 41): pressure-energy
+/// volumes with the `k` of inactive particles predicted with their
+/// density and `u`. Measured (2026-12-05, 2 threads): mean v_rms / c
+/// 0.0219 at 16 and 0.0170 at 32 (global 0.0218, 0.0170), 0.86 of the
+/// global run's particle updates at 32; energy drift 1.5e-5 and 2.0e-5,
+/// momentum 8.1e-5 at 16 and 6.0e-6 at 32 (global 3e-16: the thin and
+/// dense gas sit in different bins, and a pair's forces are then
+/// evaluated at different times): bound 1e-4.
+#[test]
+fn isobaric_cube_stays_put_under_block_time_steps() {
+    stays_put(TimeSteps::Block, 1e-4);
+}
+
+fn stays_put(time_steps: TimeSteps, momentum: f64) {
+    let (coarse, _, _, _) = run(16, false, time_steps, momentum);
+    let (fine, _, core, far) = run(32, false, time_steps, momentum);
     assert!(coarse < BOUND_16, "mean v_rms / c = {coarse} at 16");
     assert!(fine < BOUND_32, "mean v_rms / c = {fine} at 32");
     assert!(
@@ -132,10 +174,4 @@ fn isobaric_cube_stays_put() {
     );
     assert!((core / 8.0 - 1.0).abs() < 0.05, "core density {core}");
     assert!((far - 1.0).abs() < 0.05, "thin gas density {far}");
-    // A scheme known to be noisy at the contact fails the bound.
-    let (paper, _, _, _) = run(16, true);
-    assert!(
-        paper > 2.0 * BOUND_16,
-        "the paper's scheme: mean v_rms / c {paper} at 16, within reach of the bound {BOUND_16}"
-    );
 }

@@ -17,11 +17,28 @@ use sph_apps::simulation::Stop;
 
 #[test]
 fn kelvin_helmholtz_mode_grows() {
-    let scene = sph_validation::scene("kelvin-helmholtz", 32);
-    let out = sph_validation::scratch("kh32");
+    mode_grows(sph_core::TimeSteps::Global, "kh32", 1e-12);
+}
+
+/// The same checks under block time steps (issue 41), with the velocity
+/// gradients of the cleaning and the switches' divergence held by
+/// inactive particles. Measured (2026-12-05): M(1.5) 0.0658 at 32^2 x 8
+/// (global 0.0655), energy drift 6.5e-5, momentum 5.3e-5 at 32^2 and
+/// 3.5e-5 at 64^2 x 8 (M(1.5) 0.105 there, global 0.117; global momentum
+/// 1e-16: only block steps' inactive
+/// pairs break the pairwise symmetry): bound 1e-4.
+#[test]
+fn kelvin_helmholtz_mode_grows_under_block_time_steps() {
+    mode_grows(sph_core::TimeSteps::Block, "kh32-block", 1e-4);
+}
+
+fn mode_grows(time_steps: sph_core::TimeSteps, name: &str, momentum: f64) {
+    let mut scene = sph_validation::scene("kelvin-helmholtz", 32);
+    scene.config.time_steps = time_steps;
+    let out = sph_validation::scratch(name);
     let s = sph_validation::run(scene, Stop::Time(1.5), &out);
     assert!(s.energy_rel_drift.abs() < 1e-3, "{}", s.energy_rel_drift);
-    assert!(s.momentum_rel_drift < 1e-12, "{}", s.momentum_rel_drift);
+    assert!(s.momentum_rel_drift < momentum, "{}", s.momentum_rel_drift);
 
     let text = std::fs::read_to_string(out.join("curve.csv")).unwrap();
     let m: Vec<(f64, f64)> = text
@@ -39,5 +56,5 @@ fn kelvin_helmholtz_mode_grows() {
     assert!(m_end > 5.0 * seed, "M(1.5) = {m_end}");
     let at_one = m.iter().find(|(t, _)| *t >= 1.0).unwrap().1;
     assert!(m_end > at_one, "M(1.0) = {at_one}, M(1.5) = {m_end}");
-    println!("M(1.5) = {m_end}");
+    println!("{time_steps:?}: M(1.5) = {m_end}");
 }

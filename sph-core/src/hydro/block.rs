@@ -270,6 +270,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         before.extend_from_slice(&p.rho[owned.clone()]);
         self.density(p, bbox)?;
         self.density_rates(p, &line, owned.clone(), first);
+        self.predict_pressure_energy_norm(p, owned.clone());
         clock.lap(Stage::Density);
         // The EOS covers every owned particle: the active ones from their
         // new density, the others from their predicted density and u.
@@ -392,12 +393,20 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         })
     }
 
-    /// Swaps the held fields of the table (`div_v`, `xm`, `kx`, where the
-    /// scheme has them) with the step buffers the stages use.
+    /// Swaps the held fields of the table (`div_v`, `xm`, `kx`,
+    /// `alpha_eff`, the velocity gradients, where the scheme has them)
+    /// with the step buffers the stages use.
     fn swap_held_buffers(&mut self, p: &mut Particles) {
         std::mem::swap(&mut self.buf.div_v, &mut p.div_v);
         std::mem::swap(&mut self.buf.xm, &mut p.xm);
         std::mem::swap(&mut self.buf.kx, &mut p.kx);
+        std::mem::swap(&mut self.buf.alpha_eff, &mut p.alpha_eff);
+        if p.fields().cleaning {
+            self.buf.grad_v.resize_with(6, Vec::new);
+            for (held, buffer) in p.grad_v.iter_mut().zip(&mut self.buf.grad_v) {
+                std::mem::swap(held, buffer);
+            }
+        }
     }
 
     /// Brings the owners' current state to their halo copies (the halos
@@ -605,6 +614,21 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             });
     }
 
+    /// Pressure-energy volumes: an inactive particle's `X = m u` comes
+    /// from its drifted `u` (the density stage sets it), so its `k` must
+    /// follow its predicted density and `u`, `k = rho u` (`X / k = m /
+    /// rho`, and `P = (gamma - 1) k` as its EOS has it); the `k` of its
+    /// last evaluation against a drifted `X` gave inconsistent volumes.
+    fn predict_pressure_energy_norm(&mut self, p: &Particles, owned: Range<usize>) {
+        if self.config.scheme.volume != crate::Volume::PressureEnergy {
+            return;
+        }
+        let (active, o) = (&self.block.active, owned.start);
+        for i in owned.filter(|&i| !active[i - o]) {
+            self.buf.kx[i] = p.rho[i] * p.u[i];
+        }
+    }
+
     /// Kicks the active particles over their new steps and cuts the steps
     /// of the woken ones; returns the energy updates that fell back to
     /// first order.
@@ -746,6 +770,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         let dt = ticks as f64 * line.time_base();
         let (ax, ay, az, du, id, bins) = (&p.ax, &p.ay, &p.az, &p.du, &p.id, &p.bin);
         let dlnrho = &p.dlnrho;
+        let fixed_h = self.config.scheme.fixed_h;
         let r = owned.clone();
         let o = owned.start;
         let moved = (
@@ -783,10 +808,12 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 crate::integrate::place(pos, newp, [*vel[0], *vel[1], *vel[2]], bbox, step, id[i])?;
                 *u += du[i] * dt;
                 // Density by its rate, and h with it so that the kernel
-                // keeps its mass (h^3 rho constant).
+                // keeps its mass (h^3 rho constant), unless h is fixed.
                 if dlnrho[i] != 0.0 {
                     *rho *= density_drift(dlnrho[i], dt);
-                    *h *= h_drift(dlnrho[i], dt);
+                    if !fixed_h {
+                        *h *= h_drift(dlnrho[i], dt);
+                    }
                 }
                 Ok::<f64, CoreError>(moved)
             })

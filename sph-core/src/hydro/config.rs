@@ -118,31 +118,16 @@ impl HydroConfig {
         Ok(())
     }
 
-    /// What block time steps do not cover yet, named: the fields a
-    /// scheme's stages read from inactive neighbours must be in the
-    /// particle table (`docs/block-timesteps.md`, section 2).
+    /// What block time steps do not cover yet, named: turbulence driving
+    /// (its forcing is applied per global step).
     fn block_support(&self) -> Result<(), CoreError> {
-        let s = &self.scheme;
-        let missing = if self.stirring.is_some() {
-            Some("turbulence driving")
-        } else if s.volume == crate::Volume::PressureEnergy {
-            Some("pressure-energy volumes")
-        } else if s.balsara {
-            Some("the Balsara limiter")
-        } else if s.av_cleaning {
-            Some("viscosity cleaning")
-        } else if !self.eos.uses_internal_energy() {
-            Some("a barotropic equation of state")
-        } else {
-            None
-        };
-        match missing {
-            Some(what) => Err(CoreError::Invalid(format!(
-                "--time-steps {} does not cover {what} yet; use --time-steps global (or the scheme paper or std)",
+        if self.stirring.is_some() {
+            return Err(CoreError::Invalid(format!(
+                "--time-steps {} does not cover turbulence driving yet; use --time-steps global",
                 crate::Choice::name(&self.time_steps)
-            ))),
-            None => Ok(()),
+            )));
         }
+        Ok(())
     }
 
     /// The optional per-particle fields a run with this configuration

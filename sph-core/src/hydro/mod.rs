@@ -178,7 +178,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             p.enable_alpha(sw.alpha_min);
         }
         if self.config.time_steps.on_time_line() && !p.fields().block {
-            p.enable_block_steps(self.config.fields().volumes);
+            p.enable_block_steps(self.config.fields());
         }
     }
 

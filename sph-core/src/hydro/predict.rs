@@ -31,7 +31,7 @@ pub const PREDICTED: [&str; 9] = ["x", "y", "z", "vx", "vy", "vz", "u", "rho", "
 /// use sph_core::{BlockRun, FieldSet, Particles};
 /// use sph_tree::{Boundary, BoundingBox};
 /// let mut p = Particles::new(1, FieldSet::default());
-/// p.enable_block_steps(false);
+/// p.enable_block_steps(FieldSet::NONE);
 /// // A step of 2^49 ticks of a line [0, 1]: 1/8; displacement 0.1 over it.
 /// p.bin[0] = 49.0;
 /// p.dx[0] = 0.1;

@@ -147,7 +147,9 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             self.buf.alpha_eff.resize(n, 0.0);
             let constant = scheme.alpha();
             let switched = scheme.switches().is_some();
-            for i in list.targets() {
+            // The served targets: inactive particles hold theirs under
+            // block time steps.
+            for i in list.served_targets() {
                 let base = if switched { p.alpha[i] } else { constant };
                 let f = balsara(self.buf.div_v[i], self.buf.curl_v[i], p.c[i], p.h[i]);
                 self.buf.alpha_eff[i] = base * f;

@@ -122,11 +122,11 @@ pub(crate) struct RunArgs {
     /// each particle its own power-of-two fraction of a longest step
     /// (`--dt-max`), with a limiter: a blast's cold gas then takes a few
     /// long steps while the shock takes many short ones. `kdk`: the same
-    /// integrator with every particle in the smallest bin. For now `block`
-    /// covers ideal-gas hydro, with or without self-gravity, without
-    /// driving, pressure-energy volumes, the Balsara limiter or viscosity
-    /// cleaning; outputs are
-    /// written at the sub-steps that reach them (`docs/block-timesteps.md`).
+    /// integrator with every particle in the smallest bin. `block` covers
+    /// every scheme and equation of state, with or without self-gravity,
+    /// but not turbulence driving yet; snapshots asked for at a time hold
+    /// the state at that time, checkpoints wait for a synchronisation
+    /// point (`docs/block-timesteps.md`).
     #[arg(long, value_parser = choice::<TimeSteps>())]
     pub(crate) time_steps: Option<TimeSteps>,
     /// Block time steps: the longest step a particle may take (default:
