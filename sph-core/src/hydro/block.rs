@@ -463,6 +463,11 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
     /// owned particle; the inactive keep theirs), and with the limiter
     /// the wake-up requests they make of their neighbours
     /// (`block.wake`, every local particle, brought to the owners).
+    ///
+    /// The limiter's pair passes are skipped where the bins' global
+    /// extremes show that they cannot change a bin (every bin within the
+    /// factor of every other: a near-uniform scene's sub-steps); the bins
+    /// are then those the passes would give.
     fn new_bins(
         &mut self,
         p: &Particles,
@@ -474,54 +479,43 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
     ) -> Result<(), CoreError> {
         let ts = self.config.timestep;
         let delta = ts.limiter_delta;
+        let factor = f64::from(delta);
         let n = p.len();
         let o = owned.start;
-        let b = &mut self.block;
-        b.neighbour_bin.clear();
-        b.neighbour_bin.resize(owned.len(), f64::INFINITY);
-        if ts.limiter && !first && self.config.time_steps == TimeSteps::Block {
-            let driver = pair_driver(&self.kernel, bbox, p, &self.list)?;
-            driver.run(
-                &NeighbourBins {
-                    h: &p.h,
-                    support: self.kernel.support(),
-                    bin: &p.bin,
-                },
-                [&mut b.neighbour_bin[..]],
-            );
+        let limiter = ts.limiter && self.config.time_steps == TimeSteps::Block;
+        self.block.neighbour_bin.clear();
+        self.block.neighbour_bin.resize(owned.len(), f64::INFINITY);
+        self.choose_bins(p, line, owned.clone(), ti, first)?;
+        // The cap new <= (smallest neighbour bin) + delta binds nowhere
+        // if no candidate exceeds the smallest bin of all by delta.
+        if limiter && !first {
+            let b = &self.block;
+            let candidates = (0..owned.len()).filter(|&k| b.active[k]);
+            let mut ext = [
+                -owned
+                    .clone()
+                    .map(|i| p.bin[i])
+                    .fold(f64::INFINITY, f64::min),
+                candidates
+                    .map(|k| f64::from(b.new_bin[k]))
+                    .fold(f64::NEG_INFINITY, f64::max),
+            ];
+            self.domain.comm().all_reduce(&mut ext, ReduceOp::Max);
+            if ext[1] > -ext[0] + factor {
+                let b = &mut self.block;
+                let driver = pair_driver(&self.kernel, bbox, p, &self.list)?;
+                driver.run(
+                    &NeighbourBins {
+                        h: &p.h,
+                        support: self.kernel.support(),
+                        bin: &p.bin,
+                    },
+                    [&mut b.neighbour_bin[..]],
+                );
+                self.choose_bins(p, line, owned.clone(), ti, first)?;
+            }
         }
-        let (hv, comp) = (&self.buf.h_over_vsig, &self.buf.compression);
-        let energy = self.config.eos.uses_internal_energy();
-        let gravity = self.gravity.is_some();
-        b.new_bin.clear();
-        b.new_bin.resize(owned.len(), 0);
-        let (active, nb) = (&b.active, &b.neighbour_bin);
-        b.new_bin
-            .par_iter_mut()
-            .enumerate()
-            .try_for_each(|(k, out)| {
-                let i = o + k;
-                if !active[k] {
-                    *out = bin_of(p.bin[i]).0;
-                    return Ok(());
-                }
-                let cooling = super::stages::cooling_rate(p, i, energy);
-                // The acceleration criterion with self-gravity, as the
-                // global step has it.
-                let acc = if gravity {
-                    (p.ax[i] * p.ax[i] + p.ay[i] * p.ay[i] + p.az[i] * p.az[i]).sqrt()
-                } else {
-                    0.0
-                };
-                let dt = ts.particle_dt(hv[i], comp[i], acc, cooling);
-                let old = (!first).then(|| bin_of(p.bin[i]));
-                let ngb = nb[k].is_finite().then(|| bin_of(nb[k]));
-                let (bin, _) = line
-                    .new_bin(dt, old, ti, ngb, delta)
-                    .map_err(|e| CoreError::Invalid(format!("particle {}: {e}", p.id[i])))?;
-                *out = bin.0;
-                Ok::<(), CoreError>(())
-            })?;
+        let b = &mut self.block;
         if self.config.time_steps == TimeSteps::Kdk {
             // One bin for all: every particle is active at every sub-step.
             let local = b.new_bin.iter().copied().min().unwrap_or(MAX_BIN);
@@ -531,11 +525,27 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 .all_reduce_scalar(f64::from(local), ReduceOp::Min) as u8;
             b.new_bin.fill(all);
         }
-        if !ts.limiter || self.config.time_steps == TimeSteps::Kdk {
-            b.wake.clear();
+        b.wake.clear();
+        if !limiter {
             return Ok(());
         }
-        b.wake.clear();
+        // Nobody is woken or lowered if the smallest new bin plus delta
+        // reaches every bin (the inactive particles' and the new ones).
+        let mut ext = [f64::NEG_INFINITY; 2];
+        for k in 0..owned.len() {
+            if b.active[k] {
+                let new = f64::from(b.new_bin[k]);
+                ext[0] = ext[0].max(-new);
+                ext[1] = ext[1].max(new);
+            } else {
+                ext[1] = ext[1].max(p.bin[o + k]);
+            }
+        }
+        self.domain.comm().all_reduce(&mut ext, ReduceOp::Max);
+        if ext[1] <= -ext[0] + factor {
+            return Ok(());
+        }
+        let b = &mut self.block;
         b.wake.resize_with(n, || AtomicU8::new(u8::MAX));
         // Wake-ups until no active particle is lowered: an active
         // particle woken by another wakes its own neighbours in the same
@@ -584,6 +594,56 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 break;
             }
         }
+        Ok(())
+    }
+
+    /// Each active particle's bin from its own criteria, capped by the
+    /// neighbours' smallest bin in `block.neighbour_bin` (infinite: no
+    /// cap), into `block.new_bin`; the inactive keep theirs.
+    fn choose_bins(
+        &mut self,
+        p: &Particles,
+        line: &TimeLine,
+        owned: Range<usize>,
+        ti: Ticks,
+        first: bool,
+    ) -> Result<(), CoreError> {
+        let ts = self.config.timestep;
+        let delta = ts.limiter_delta;
+        let o = owned.start;
+        let b = &mut self.block;
+        let (hv, comp) = (&self.buf.h_over_vsig, &self.buf.compression);
+        let energy = self.config.eos.uses_internal_energy();
+        let gravity = self.gravity.is_some();
+        b.new_bin.clear();
+        b.new_bin.resize(owned.len(), 0);
+        let (active, nb) = (&b.active, &b.neighbour_bin);
+        b.new_bin
+            .par_iter_mut()
+            .enumerate()
+            .try_for_each(|(k, out)| {
+                let i = o + k;
+                if !active[k] {
+                    *out = bin_of(p.bin[i]).0;
+                    return Ok(());
+                }
+                let cooling = super::stages::cooling_rate(p, i, energy);
+                // The acceleration criterion with self-gravity, as the
+                // global step has it.
+                let acc = if gravity {
+                    (p.ax[i] * p.ax[i] + p.ay[i] * p.ay[i] + p.az[i] * p.az[i]).sqrt()
+                } else {
+                    0.0
+                };
+                let dt = ts.particle_dt(hv[i], comp[i], acc, cooling);
+                let old = (!first).then(|| bin_of(p.bin[i]));
+                let ngb = nb[k].is_finite().then(|| bin_of(nb[k]));
+                let (bin, _) = line
+                    .new_bin(dt, old, ti, ngb, delta)
+                    .map_err(|e| CoreError::Invalid(format!("particle {}: {e}", p.id[i])))?;
+                *out = bin.0;
+                Ok::<(), CoreError>(())
+            })?;
         Ok(())
     }
 
