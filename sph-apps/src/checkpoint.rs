@@ -144,6 +144,7 @@ pub fn snapshot(
     if let Some(b) = s.block {
         snap.set_attr(TIME_LINE, Attr::F64Array(vec![b.t_begin, b.t_end]))
             .set_attr(TIME_LINE_TOP_BIN, Attr::I64(i64::from(b.dt_max_bin)))
+            .set_attr(TIME_LINE_DT_MAX, Attr::F64(b.dt_max))
             .set_attr(TIME_LINE_TICK, Attr::I64(b.ti as i64))
             .set_attr(PARTICLE_UPDATES, Attr::I64(b.updates as i64))
             .set_attr(DOMAIN_SYNCS, Attr::I64(b.syncs as i64));
@@ -158,6 +159,8 @@ pub fn snapshot(
 
 /// Attribute of block-step runs: the time line's start and end times.
 pub const TIME_LINE: &str = "time_line";
+/// Attribute of block-step runs: the longest step any particle may take.
+pub const TIME_LINE_DT_MAX: &str = "time_line_dt_max";
 /// Attribute of block-step runs: the longest step's bin.
 pub const TIME_LINE_TOP_BIN: &str = "time_line_top_bin";
 /// Attribute of block-step runs: the tick of the checkpoint (a
@@ -368,10 +371,19 @@ fn block_run(rows: &Snapshot) -> Result<Option<BlockRun>, String> {
             let top = count(TIME_LINE_TOP_BIN)?;
             let top =
                 u8::try_from(top).map_err(|_| format!("{TIME_LINE_TOP_BIN} {top} is too large"))?;
+            let dt_max = match rows.attr(TIME_LINE_DT_MAX) {
+                Some(Attr::F64(v)) if *v > 0.0 => *v,
+                other => {
+                    return Err(format!(
+                        "{TIME_LINE_DT_MAX} is {other:?}, not a positive time"
+                    ))
+                }
+            };
             Ok(Some(BlockRun {
                 t_begin: span[0],
                 t_end: span[1],
                 dt_max_bin: top,
+                dt_max,
                 ti: count(TIME_LINE_TICK)?,
                 updates: count(PARTICLE_UPDATES)?,
                 syncs: count(DOMAIN_SYNCS)?,

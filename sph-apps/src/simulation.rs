@@ -410,16 +410,10 @@ impl<C: Communicator> Simulation<C> {
                 &self.scene.bbox,
             )?;
         }
-        if let (Some(line), Stop::Time(te)) = (self.hydro.time_line(), stop) {
-            // A restarted block-step run continues its line to its end.
-            let end = line.time(sph_core::timeline::LINE);
-            if te != end {
-                return Err(AppError::Usage(format!(
-                    "--end-time {te}: the checkpoint's block-step time line ends at t = {end}; continue to that end (give --end-time {end} or leave it out)"
-                )));
-            }
-        }
-        if self.scene.config.time_steps.on_time_line() && self.hydro.time_line().is_none() {
+        // Block time steps: the run's end (a restored run keeps the line
+        // of its checkpoint up to its next synchronisation point, which
+        // is its first sub-step).
+        if self.scene.config.time_steps.on_time_line() {
             let end = match stop {
                 Stop::Time(te) => Some(te),
                 Stop::Steps(_) => self.line_end,

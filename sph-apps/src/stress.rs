@@ -16,7 +16,7 @@ use crate::rng::SplitMix64;
 use crate::simulation::{Progress, Stop};
 use crate::{AppError, Simulation, Summary};
 use serde::Serialize;
-use sph_core::HydroConfig;
+use sph_core::{HydroConfig, TimeSteps};
 use sph_kernels::KernelChoice;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -49,7 +49,13 @@ pub struct Options {
     pub out: PathBuf,
     /// Print each scenario's line as it finishes.
     pub verbose: bool,
+    /// How the particles share time steps in every scenario.
+    pub time_steps: TimeSteps,
 }
+
+/// The end of a block-step time line for a scenario that stops after a
+/// number of (sub-)steps.
+const STEPS_HORIZON: f64 = 1e6;
 
 /// The numerical controls of a scenario.
 fn config(ng0: usize, ngmax: usize, courant: f64) -> HydroConfig {
@@ -75,20 +81,28 @@ fn uniform_box(side: usize, p0: f64, config: HydroConfig) -> Result<Scene, AppEr
     Ok(s)
 }
 
-/// Runs `scene` to `stop` with `kernel` into `dir`; the summary or the
-/// error, and the wall time.
+/// Runs `scene` to `stop` with `kernel` and the time steps of `o` into
+/// `dir` (`--steps` counts sub-steps under block time steps); the summary
+/// or the error, and the wall time.
 fn run(
-    scene: Scene,
+    o: &Options,
+    mut scene: Scene,
     kernel: KernelChoice,
     stop: Stop,
     dir: &Path,
 ) -> (Result<Summary, AppError>, f64) {
+    scene.config.time_steps = o.time_steps;
     let start = Instant::now();
     let result = kernel
         .fast()
         .map_err(AppError::from)
         .and_then(|k| Simulation::new(scene, k, kernel.to_string()))
-        .and_then(|mut sim| sim.run(stop, dir, Progress::Quiet));
+        .and_then(|mut sim| {
+            // A block-step line needs an end: far beyond any scenario's
+            // steps (each synchronisation point may start a new line).
+            sim.set_time_line_end(STEPS_HORIZON);
+            sim.run(stop, dir, Progress::Quiet)
+        });
     (result, start.elapsed().as_secs_f64())
 }
 
@@ -107,6 +121,8 @@ fn judge(name: &str, what: &str, result: Result<Summary, AppError>, wall_s: f64)
         Err(e) => o.note = e.to_string(),
         Ok(s) => {
             o.figures.insert("steps".into(), s.steps as f64);
+            o.figures
+                .insert("particle_updates".into(), s.particle_updates as f64);
             o.figures.insert("t_end".into(), s.t_end);
             o.figures.insert("energy_drift".into(), s.energy_rel_drift);
             o.figures
@@ -202,7 +218,7 @@ fn noisy_lattice(o: &Options, noise: f64) -> Result<Outcome, AppError> {
     let d0 = min_pair_distance(&s);
     let name = format!("noisy-lattice-{:.0}%", noise * 100.0);
     let dir = o.out.join(&name);
-    let (r, wall) = run(s, KernelChoice::default(), Stop::Steps(steps), &dir);
+    let (r, wall) = run(o, s, KernelChoice::default(), Stop::Steps(steps), &dir);
     let what = format!(
         "{side}^3 periodic lattice, displacements up to {:.0}% of the spacing, uniform P = 1, {steps} steps",
         noise * 100.0
@@ -243,6 +259,7 @@ fn courant(o: &Options, case: &str, k: f64) -> Result<Outcome, AppError> {
     let s = case_scene(case, side, config(100, 150, k))?;
     let name = format!("courant-{case}-{k}");
     let (r, wall) = run(
+        o,
         s,
         KernelChoice::default(),
         Stop::Time(t),
@@ -282,6 +299,7 @@ fn strong_sod(o: &Options) -> Result<Outcome, AppError> {
     s.case = "strong-sod";
     let name = "strong-sod-1e5".to_string();
     let (r, wall) = run(
+        o,
         s,
         KernelChoice::default(),
         Stop::Time(0.1),
@@ -300,7 +318,7 @@ fn kernel_case(o: &Options, kernel: &str, ng0: usize) -> Result<Outcome, AppErro
         .parse()
         .map_err(|e: sph_kernels::KernelError| AppError::Usage(e.to_string()))?;
     let name = format!("sedov-{}-ng{ng0}", kernel.replace(':', ""));
-    let (r, wall) = run(s, k, Stop::Time(t), &o.out.join(&name));
+    let (r, wall) = run(o, s, k, Stop::Time(t), &o.out.join(&name));
     let what = format!("sedov -n {side} to t = {t}, kernel {kernel}, ng0 {ng0}, ngmax {ngmax}");
     Ok(judge(&name, &what, r, wall))
 }
@@ -347,6 +365,7 @@ fn clump(o: &Options) -> Result<Outcome, AppError> {
     };
     let name = "h-spread-100x".to_string();
     let (r, wall) = run(
+        o,
         s,
         KernelChoice::default(),
         Stop::Steps(steps),
@@ -406,6 +425,7 @@ fn mach10_blob(o: &Options) -> Result<Outcome, AppError> {
     };
     let name = "mach10-blob".to_string();
     let (r, wall) = run(
+        o,
         s,
         KernelChoice::default(),
         Stop::Time(t_end),
@@ -423,7 +443,7 @@ fn at_rest(o: &Options) -> Result<Outcome, AppError> {
     let s = uniform_box(side, 1.0, config(100, 150, 0.2))?;
     let name = "box-at-rest".to_string();
     let dir = o.out.join(&name);
-    let (r, wall) = run(s, KernelChoice::default(), Stop::Steps(steps), &dir);
+    let (r, wall) = run(o, s, KernelChoice::default(), Stop::Steps(steps), &dir);
     let what = format!("{side}^3 periodic lattice at rest, uniform P = 1, {steps} steps");
     let mut out = judge(&name, &what, r, wall);
     // Momentum against M c (mass 1, sound speed sqrt(5/3)): the velocities
@@ -481,7 +501,7 @@ fn extreme(o: &Options, which: &str) -> Result<Outcome, AppError> {
     };
     let name = format!("extreme-{which}");
     let dir = o.out.join(&name);
-    let (r, wall) = run(s, KernelChoice::default(), Stop::Steps(50), &dir);
+    let (r, wall) = run(o, s, KernelChoice::default(), Stop::Steps(50), &dir);
     let refused = match &r {
         Err(e) => Some(e.to_string()),
         Ok(_) => None,

@@ -175,6 +175,14 @@ impl TimeLine {
 
     /// The largest bin whose step is at most `dt` (at most [`MAX_BIN`]), or
     /// `None` below one tick.
+    /// The bin of the longest step of this line no longer than `dt`,
+    /// within the line's bins (0 for a step below one tick): where a step
+    /// of another line falls on this one.
+    pub fn bin_of_dt(&self, dt: f64) -> Bin {
+        self.floor_bin(dt)
+            .map_or(Bin(0), |b| b.min(self.dt_max_bin))
+    }
+
     fn floor_bin(&self, dt: f64) -> Option<Bin> {
         let t = self.ticks(dt);
         (t > 0).then(|| Bin((Ticks::BITS - 1 - t.leading_zeros()) as u8))

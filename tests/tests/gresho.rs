@@ -129,13 +129,16 @@ fn bounds_hold(alpha_one: &Summary, switched: &Summary, momentum: f64) {
 }
 
 /// The same bounds under block time steps (issue 41). The vortex has
-/// nearly one time step everywhere, so every particle sits in the bin
-/// below it: 1024 sub-steps against 625 (alpha = 1) and 687 (switches)
-/// global steps, 1.57x and 1.46x the particle updates; the errors hold.
-/// Measured (2026-12-04): L1(v_phi) 0.1747 (global 0.1753) and 0.1104
-/// (0.1045), turn errors 0.126 and 0.102, energy drift -3.8e-5 and -1.1e-5, momentum 3.9e-16 and
-/// 1.2e-11 (every particle active at every sub-step but for round-off in
-/// the switches' bins: bound 1e-9).
+/// nearly one time step everywhere: where one step a hair below the
+/// smallest criterion step for every particle costs fewer updates than
+/// the power-of-two bins of the run's span, that is the step (the bins
+/// alone cost 1.57x the global run's updates). Measured (2026-12-05):
+/// 648 / 764 sub-steps, 0.98x / 0.99x the global run's updates
+/// (alpha = 1 / switches), L1(v_phi) 0.1697 / 0.1117 (global 0.1753 /
+/// 0.1045), turn errors 0.124 / 0.117, energy drift 2.6e-6 / 7.2e-5,
+/// momentum 2.6e-16 / 6.9e-6; with switches at side 32 momentum 1.1e-5
+/// (a pair's forces at different times where the switches' particles sit
+/// in two bins): bound 1e-4, the block bound of the other cases.
 #[test]
 fn gresho_vortex_holds_its_bounds_under_block_time_steps() {
     let block = sph_core::TimeSteps::Block;
@@ -144,5 +147,5 @@ fn gresho_vortex_holds_its_bounds_under_block_time_steps() {
     println!("block: turn error alpha = 1 {turn_alpha_one}, switches {turn_switched}");
     assert!(turn_alpha_one < TURN_BOUND_ALPHA_ONE, "{turn_alpha_one}");
     assert!(turn_switched < TURN_BOUND_SWITCHES, "{turn_switched}");
-    bounds_hold(&alpha_one, &switched, 1e-9);
+    bounds_hold(&alpha_one, &switched, 1e-4);
 }

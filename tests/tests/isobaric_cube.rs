@@ -153,9 +153,9 @@ fn isobaric_cube_stays_put() {
 /// The same bounds under block time steps (issue 41): pressure-energy
 /// volumes with the `k` of inactive particles predicted with their
 /// density and `u`. Measured (2026-12-05, 2 threads): mean v_rms / c
-/// 0.0219 at 16 and 0.0170 at 32 (global 0.0218, 0.0170), 0.86 of the
-/// global run's particle updates at 32; energy drift 1.5e-5 and 2.0e-5,
-/// momentum 8.1e-5 at 16 and 6.0e-6 at 32 (global 3e-16: the thin and
+/// 0.0222 at 16 and 0.0171 at 32 (global 0.0218, 0.0170), 0.87 of the
+/// global run's particle updates at 32; energy drift 1.9e-6 and 1.5e-5,
+/// momentum 5.5e-5 at 16 and 5.8e-5 at 32 (global 3e-16: the thin and
 /// dense gas sit in different bins, and a pair's forces are then
 /// evaluated at different times): bound 1e-4.
 #[test]

@@ -22,10 +22,10 @@ fn kelvin_helmholtz_mode_grows() {
 
 /// The same checks under block time steps (issue 41), with the velocity
 /// gradients of the cleaning and the switches' divergence held by
-/// inactive particles. Measured (2026-12-05): M(1.5) 0.0658 at 32^2 x 8
-/// (global 0.0655), energy drift 6.5e-5, momentum 5.3e-5 at 32^2 and
-/// 3.5e-5 at 64^2 x 8 (M(1.5) 0.105 there, global 0.117; global momentum
-/// 1e-16: only block steps' inactive
+/// inactive particles. Measured (2026-12-05): M(1.5) 0.0606 at 32^2 x 8
+/// (global 0.0655) with 0.98x the global run's particle updates, energy
+/// drift 9.4e-5, momentum 3.5e-5; at 64^2 x 8 M(1.5) 0.103 (global
+/// 0.117), momentum 1.4e-5 (global 1e-16: only block steps' inactive
 /// pairs break the pairwise symmetry): bound 1e-4.
 #[test]
 fn kelvin_helmholtz_mode_grows_under_block_time_steps() {

@@ -1,10 +1,11 @@
 //! `sphexa stress`: the suite of [`crate::stress`], its table, and whether
 //! every scenario passed.
 
-use super::parse::parse_threads;
+use super::parse::{choice, parse_threads};
 use super::start_threads;
 use crate::AppError;
 use clap::Args;
+use sph_core::TimeSteps;
 use std::path::PathBuf;
 
 /// The options of `sphexa stress`.
@@ -19,6 +20,13 @@ pub(crate) struct StressArgs {
     /// Output folder (default out/stress): stress.json and each run's files.
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
+    /// How particles share time steps in every scenario: `global` (one
+    /// step for all, the default) or `block` (each particle its own
+    /// power-of-two step, with the limiter); under `block` a scenario's
+    /// step count counts sub-steps. Each scenario's `particle_updates`
+    /// figure in stress.json compares the two.
+    #[arg(long, value_parser = choice::<TimeSteps>(), default_value = "global")]
+    time_steps: TimeSteps,
 }
 
 /// `sphexa stress`: the suite, its table, and whether every scenario passed.
@@ -29,6 +37,7 @@ pub(crate) fn stress(a: StressArgs) -> Result<bool, AppError> {
         quick: a.quick,
         out: out.clone(),
         verbose: true,
+        time_steps: a.time_steps,
     })?;
     print!("{}", crate::stress::table(&outcomes));
     let failed = outcomes.iter().filter(|o| !o.pass).count();

@@ -51,8 +51,13 @@ use std::sync::atomic::{AtomicU8, Ordering};
 /// The block-step state of a pipeline besides the particles' bins.
 #[derive(Debug, Default)]
 pub(super) struct BlockState {
-    /// The integer time line (set by [`Hydro::set_time_line`]).
+    /// The integer time line (set by [`Hydro::set_time_line`], started
+    /// anew at every synchronisation point).
     pub(super) line: Option<TimeLine>,
+    /// The run's end: the last line ends there.
+    run_end: f64,
+    /// The longest step any particle may take.
+    dt_cap: f64,
     /// The current tick.
     pub(super) ti: Ticks,
     /// Whether the particles hold bins (false before the first sub-step).
@@ -87,6 +92,9 @@ pub(super) struct BlockState {
     /// Each local particle's time since its last update (alpha's advance).
     elapsed: Vec<f64>,
     rho_before: Vec<f64>,
+    /// Each active owned particle's step by its own criteria (infinite
+    /// for the inactive).
+    dt_criteria: Vec<f64>,
     new_bin: Vec<u8>,
     neighbour_bin: Vec<f64>,
     wake: Vec<AtomicU8>,
@@ -110,16 +118,25 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
     /// The time line of a block-step run, from the current time to
     /// `t_end` (the run's end), with the longest step
     /// [`TimestepParams::dt_max`](crate::TimestepParams::dt_max) (an
-    /// eighth of the span when unset). The run then ends exactly at
-    /// `t_end`. Call it before the first step; global runs ignore it.
+    /// eighth of the span when unset). Every synchronisation point starts
+    /// a new line whose steps are the smallest criterion step times
+    /// powers of two, the last one ending exactly at `t_end`. Call it
+    /// before the first step (a restored run: before its first step after
+    /// the restore, which keeps the restored line and its longest step
+    /// and ends at this `t_end`); global runs ignore it.
     ///
     /// # Errors
     /// An end not after the current time, or a longest step below one
     /// tick.
     pub fn set_time_line(&mut self, t_end: f64) -> Result<(), CoreError> {
+        self.block.run_end = t_end;
+        if self.block.started {
+            return Ok(());
+        }
         let span = t_end - self.t;
         let dt_max = self.config.timestep.dt_max.unwrap_or(span / 8.0);
         self.block.line = Some(TimeLine::new(self.t, t_end, dt_max)?);
+        self.block.dt_cap = dt_max;
         self.block.ti = 0;
         Ok(())
     }
@@ -160,6 +177,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             t_begin: line.time(0),
             t_end: line.time(LINE),
             dt_max_bin: line.dt_max_bin().0,
+            dt_max: self.block.dt_cap,
             ti: self.block.ti,
             updates: self.block.updates,
             syncs: self.block.syncs,
@@ -178,6 +196,8 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             )));
         }
         self.block.line = Some(line);
+        self.block.dt_cap = b.dt_max;
+        self.block.run_end = b.t_end;
         self.block.ti = b.ti;
         self.block.started = true;
         self.block.updates = b.updates;
@@ -201,7 +221,9 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 "block time steps need a time line: call Hydro::set_time_line with the run's end time before the first step".into(),
             )
         })?;
-        if self.block.ti >= LINE {
+        // A line's end is a synchronisation point, where the next line
+        // starts, unless it is the run's end.
+        if self.block.ti >= LINE && line.time(LINE) >= self.block.run_end {
             return Err(CoreError::Invalid(format!(
                 "block time steps: the time line ends at t = {}; set a later end",
                 line.time(LINE)
@@ -312,6 +334,24 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             );
         clock.lap(Stage::Conserved);
 
+        self.criteria_steps(p, owned.clone(), first);
+        // Every particle starts a step here: a new line from now, its bins
+        // those of the last line's steps.
+        let next = if all_active {
+            self.next_line(&line, ti)?
+        } else {
+            line
+        };
+        let ti = if next == line {
+            ti
+        } else {
+            for b in p.bin.iter_mut() {
+                *b = f64::from(next.bin_of_dt(line.dt(bin_of(*b))).0);
+            }
+            self.block.line = Some(next);
+            0
+        };
+        let line = next;
         self.new_bins(p, bbox, &line, owned.clone(), ti, first)?;
         let fallbacks = self.kick(p, &line, owned.clone(), ti, first, step)?;
         let (next, limit) = self.next_tick(p, owned.clone(), ti);
@@ -597,7 +637,87 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         Ok(())
     }
 
-    /// Each active particle's bin from its own criteria, capped by the
+    /// Each active owned particle's step by its own criteria (Courant
+    /// with its signal velocity, density change, acceleration with
+    /// gravity, cooling), into `block.dt_criteria`.
+    fn criteria_steps(&mut self, p: &Particles, owned: Range<usize>, first: bool) {
+        let ts = self.config.timestep;
+        let o = owned.start;
+        let b = &mut self.block;
+        let (hv, comp) = (&self.buf.h_over_vsig, &self.buf.compression);
+        let energy = self.config.eos.uses_internal_energy();
+        let gravity = self.gravity.is_some();
+        let active = &b.active;
+        b.dt_criteria.clear();
+        b.dt_criteria.resize(owned.len(), f64::INFINITY);
+        b.dt_criteria
+            .par_iter_mut()
+            .enumerate()
+            .filter(|(k, _)| first || active[*k])
+            .for_each(|(k, out)| {
+                let i = o + k;
+                let cooling = super::stages::cooling_rate(p, i, energy);
+                // The acceleration criterion with self-gravity, as the
+                // global step has it.
+                let acc = if gravity {
+                    (p.ax[i] * p.ax[i] + p.ay[i] * p.ay[i] + p.az[i] * p.az[i]).sqrt()
+                } else {
+                    0.0
+                };
+                *out = ts.particle_dt(hv[i], comp[i], acc, cooling);
+            });
+    }
+
+    /// The line from now, at a synchronisation point (every particle
+    /// starts a step): the line so far while it runs to the run's end,
+    /// else a line to the end; or, where that costs fewer particle
+    /// updates per unit time, a line of one step a hair below the
+    /// smallest criterion step, which every particle takes. Bins of a
+    /// line to the end are powers of two of its span, so a scene whose
+    /// particles all need about the same step can lose up to a factor 2
+    /// there (Gresho: 1.5x the global run's steps); the one-step line
+    /// steps them at their criteria, as a global run does.
+    fn next_line(&self, line: &TimeLine, ti: Ticks) -> Result<TimeLine, CoreError> {
+        let b = &self.block;
+        let (t, end) = (self.t, b.run_end);
+        let longest = b.dt_cap.min(end - t);
+        let to_end = if line.time(LINE) >= end && ti < LINE {
+            *line
+        } else {
+            TimeLine::new(t, end, longest)?
+        };
+        // Each particle's bin on that line by its criteria (the limiter
+        // aside), counted per bin: exact integer sums, the same decision
+        // on every rank count.
+        let comm = self.domain.comm();
+        let mut counts = vec![0.0; usize::from(MAX_BIN) + 1];
+        let mut dt_min = f64::INFINITY;
+        for &dt in &b.dt_criteria {
+            counts[usize::from(to_end.bin_of_dt(dt.min(longest)).0)] += 1.0;
+            dt_min = dt_min.min(dt);
+        }
+        comm.all_reduce(&mut counts, ReduceOp::Sum);
+        let dt_min = comm.all_reduce_scalar(dt_min, ReduceOp::Min);
+        // A hair below: particles whose criteria differ from the smallest
+        // by rounding (a lattice's mirror images) share its step.
+        let pace = dt_min * (1.0 - 1.0 / 1024.0);
+        if pace > 0.0 && pace <= longest && t + 2.0 * pace <= end {
+            let n: f64 = counts.iter().sum();
+            let rate: f64 = counts
+                .iter()
+                .enumerate()
+                .map(|(bin, &c)| c / to_end.dt(Bin(bin as u8)))
+                .sum();
+            if n / pace < rate {
+                // One step: the top bin is the whole line (whose span is
+                // `pace` up to the rounding of `t + pace`).
+                return TimeLine::with_top_bin(t, t + pace, Bin(MAX_BIN));
+            }
+        }
+        Ok(to_end)
+    }
+
+    /// Each active particle's bin from its criteria step, capped by the
     /// neighbours' smallest bin in `block.neighbour_bin` (infinite: no
     /// cap), into `block.new_bin`; the inactive keep theirs.
     fn choose_bins(
@@ -608,16 +728,12 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         ti: Ticks,
         first: bool,
     ) -> Result<(), CoreError> {
-        let ts = self.config.timestep;
-        let delta = ts.limiter_delta;
+        let delta = self.config.timestep.limiter_delta;
         let o = owned.start;
         let b = &mut self.block;
-        let (hv, comp) = (&self.buf.h_over_vsig, &self.buf.compression);
-        let energy = self.config.eos.uses_internal_energy();
-        let gravity = self.gravity.is_some();
         b.new_bin.clear();
         b.new_bin.resize(owned.len(), 0);
-        let (active, nb) = (&b.active, &b.neighbour_bin);
+        let (active, nb, dt) = (&b.active, &b.neighbour_bin, &b.dt_criteria);
         b.new_bin
             .par_iter_mut()
             .enumerate()
@@ -627,19 +743,10 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                     *out = bin_of(p.bin[i]).0;
                     return Ok(());
                 }
-                let cooling = super::stages::cooling_rate(p, i, energy);
-                // The acceleration criterion with self-gravity, as the
-                // global step has it.
-                let acc = if gravity {
-                    (p.ax[i] * p.ax[i] + p.ay[i] * p.ay[i] + p.az[i] * p.az[i]).sqrt()
-                } else {
-                    0.0
-                };
-                let dt = ts.particle_dt(hv[i], comp[i], acc, cooling);
                 let old = (!first).then(|| bin_of(p.bin[i]));
                 let ngb = nb[k].is_finite().then(|| bin_of(nb[k]));
                 let (bin, _) = line
-                    .new_bin(dt, old, ti, ngb, delta)
+                    .new_bin(dt[k], old, ti, ngb, delta)
                     .map_err(|e| CoreError::Invalid(format!("particle {}: {e}", p.id[i])))?;
                 *out = bin.0;
                 Ok::<(), CoreError>(())
@@ -752,7 +859,9 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                     *bin = f64::from(new.0);
                     return Ok(0);
                 }
-                let old_dt = if first { dt0 } else { line.dt(bin_of(*bin)) };
+                // The step just ended (on the last line, at a
+                // synchronisation point).
+                let old_dt = if first { dt0 } else { b.elapsed[i] };
                 let new = Bin(b.new_bin[k].min(woken));
                 let dt = line.dt(new);
                 for c in 0..3 {
@@ -870,9 +979,10 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 // Density by its rate, and h with it so that the kernel
                 // keeps its mass (h^3 rho constant), unless h is fixed.
                 if dlnrho[i] != 0.0 {
-                    *rho *= density_drift(dlnrho[i], dt);
+                    let r = drift_rate(dlnrho[i], line.dt(bin_of(bins[i])));
+                    *rho *= density_drift(r, dt);
                     if !fixed_h {
-                        *h *= h_drift(dlnrho[i], dt);
+                        *h *= h_drift(r, dt);
                     }
                 }
                 Ok::<f64, CoreError>(moved)
@@ -881,15 +991,31 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         // Volume elements X ~ m / rho0 go with the volume: X *= exp(-r dt)
         // (their normalisation k stays).
         if !p.xm.is_empty() {
-            let dlnrho = &p.dlnrho;
+            let (dlnrho, bins) = (&p.dlnrho, &p.bin);
             p.xm[owned.clone()]
                 .par_iter_mut()
-                .zip(dlnrho[owned].par_iter())
-                .filter(|(_, &r)| r != 0.0)
-                .for_each(|(x, &r)| *x *= (-r * dt).exp());
+                .zip(dlnrho[owned.clone()].par_iter())
+                .zip(bins[owned].par_iter())
+                .filter(|((_, &r), _)| r != 0.0)
+                .for_each(|((x, &r), &b)| {
+                    *x *= (-drift_rate(r, line.dt(bin_of(b))) * dt).exp();
+                });
         }
         Ok(self.domain.comm().all_reduce_scalar(moved, ReduceOp::Max))
     }
+}
+
+/// The density rate a drift applies: the particle's rate `r` over its
+/// last step, bounded so that the density it predicts changes by at most
+/// a factor 2 over the particle's current `step`. The density criterion
+/// keeps a compression's change within 6% a step; a rate that would
+/// exceed the bound comes from a density that jumped (a dense clump's
+/// particle passing by), and extrapolated over a long step it would
+/// inflate h without bound.
+#[inline]
+pub(super) fn drift_rate(r: f64, step: f64) -> f64 {
+    let bound = std::f64::consts::LN_2 / step;
+    r.clamp(-bound, bound)
 }
 
 /// The factor the drift applies to a density over `dt` at the rate

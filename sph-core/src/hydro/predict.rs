@@ -8,7 +8,7 @@
 //! inside its current step, so the state at any time of the sub-step just
 //! taken follows from the current one by the same formulas, run back.
 
-use super::block::{density_drift, h_drift};
+use super::block::{density_drift, drift_rate, h_drift};
 use super::BlockRun;
 use crate::timeline::{Bin, TimeLine};
 use crate::{CoreError, Particles};
@@ -38,7 +38,7 @@ pub const PREDICTED: [&str; 9] = ["x", "y", "z", "vx", "vy", "vz", "u", "rho", "
 /// p.x[0] = 0.5;
 /// p.vx[0] = 0.8;
 /// p.ax[0] = 2.0;
-/// let run = BlockRun { t_begin: 0.0, t_end: 1.0, dt_max_bin: 49, ti: 0, updates: 0, syncs: 0 };
+/// let run = BlockRun { t_begin: 0.0, t_end: 1.0, dt_max_bin: 49, dt_max: 0.125, ti: 0, updates: 0, syncs: 0 };
 /// let bbox = BoundingBox::cube(0.0, 1.0, Boundary::Periodic).unwrap();
 /// let mut x = vec![p.x[0]];
 /// assert!(predict_field(&p, 0..1, &bbox, &run, 0.25, 0.25 - 1.0 / 16.0, "x", &mut x).unwrap());
@@ -98,8 +98,15 @@ pub fn predict_field(
         *v = match field {
             "vx" | "vy" | "vz" => *v + a[axis(&field[1..]).expect("an axis")][i] * dt,
             "u" => *v + p.du[i] * dt,
-            "rho" => *v * density_drift(p.dlnrho[i], dt),
-            "h" => *v * h_drift(p.dlnrho[i], dt),
+            "rho" | "h" => {
+                let step = line.dt(Bin(p.bin[i] as u8));
+                let r = drift_rate(p.dlnrho[i], step);
+                *v * if field == "rho" {
+                    density_drift(r, dt)
+                } else {
+                    h_drift(r, dt)
+                }
+            }
             _ => {
                 let c = axis(field).expect("a position");
                 let step = line.dt(Bin(p.bin[i] as u8));

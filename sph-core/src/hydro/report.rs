@@ -212,6 +212,8 @@ pub struct BlockRun {
     pub t_end: f64,
     /// The longest step's bin (`2^bin` ticks).
     pub dt_max_bin: u8,
+    /// The longest step any particle may take (every new line's cap).
+    pub dt_max: f64,
     /// The current tick.
     pub ti: u64,
     /// Particle updates so far.
