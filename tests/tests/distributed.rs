@@ -33,7 +33,7 @@ use std::time::{Duration, Instant};
 /// Particles per side and steps of each run: (case, side, steps). Every
 /// registered case runs (with [`DEFAULT_SIZE`] unless listed here), then
 /// the test-only `drift` case.
-const SIZES: [(&str, usize, u64); 10] = [
+const SIZES: [(&str, usize, u64); 12] = [
     ("sedov", 24, 20),
     // Its box is 0.25 across: 32 per unit length gives the kernel room.
     ("wind-shock", 32, 20),
@@ -44,6 +44,10 @@ const SIZES: [(&str, usize, u64); 10] = [
     ("sedov-best-block", 24, 30),
     // Block steps with self-gravity: 30 sub-steps of a line to t = 1.
     ("evrard-block", 16, 30),
+    // Block steps in one-step lines (switches, cleaning, IAD).
+    ("kelvin-helmholtz-block", 16, 30),
+    // Block steps with pressure-energy volumes, the two gases in bins.
+    ("isobaric-cube-block", 10, 30),
     ("square-patch", 20, 20),
     ("noh", 20, 20),
     ("drift", 16, 30),
@@ -53,9 +57,11 @@ const SIZES: [(&str, usize, u64); 10] = [
 const DEFAULT_SIZE: (usize, u64) = (16, 20);
 
 /// The runs: every registered case, then `drift`, `sedov-ve` and
-/// `sedov-block`, `sedov-best-block` and `evrard-block` (block time
-/// steps: wake-ups brought to their owners, halos refreshed between
-/// syncs, gravity for the active particles on a drifted tree), with
+/// `sedov-block`, `sedov-best-block`, `evrard-block`,
+/// `kelvin-helmholtz-block` and `isobaric-cube-block` (block time steps:
+/// wake-ups brought to their owners, halos refreshed between syncs,
+/// gravity for the active particles on a drifted tree, the choice of
+/// each new time line), with
 /// their sizes (only those in `SPH_DISTRIBUTED_ONLY`, when set).
 fn runs() -> Vec<(&'static str, usize, u64)> {
     let only = std::env::var("SPH_DISTRIBUTED_ONLY").ok();
@@ -67,6 +73,8 @@ fn runs() -> Vec<(&'static str, usize, u64)> {
             "sedov-block",
             "sedov-best-block",
             "evrard-block",
+            "kelvin-helmholtz-block",
+            "isobaric-cube-block",
         ])
         .filter(|case| {
             only.as_ref()
@@ -132,8 +140,11 @@ fn scene(case: &str) -> Scene {
         s.config.timestep.first_step = sph_core::timestep::FirstStep::Criteria;
         return s;
     }
-    if case == "evrard-block" {
-        let mut s = sph_validation::scene("evrard", side);
+    if let Some(base) = ["evrard", "kelvin-helmholtz", "isobaric-cube"]
+        .into_iter()
+        .find(|b| case.strip_suffix("-block") == Some(*b))
+    {
+        let mut s = sph_validation::scene(base, side);
         s.config.time_steps = sph_core::TimeSteps::Block;
         return s;
     }
@@ -148,13 +159,13 @@ fn scene(case: &str) -> Scene {
     sph_validation::scene(case, side)
 }
 
-/// Where the time line of a block-step run ends: Sedov's end time, or
-/// Evrard's bounce.
+/// Where the time line of a block-step run ends: Sedov's end time,
+/// Evrard's bounce, the other cases' end times.
 fn line_end(case: &str) -> f64 {
-    if case == "evrard-block" {
-        1.0
-    } else {
-        0.05
+    match case {
+        "evrard-block" | "isobaric-cube-block" => 1.0,
+        "kelvin-helmholtz-block" => 1.5,
+        _ => 0.05,
     }
 }
 
