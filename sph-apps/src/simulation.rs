@@ -539,7 +539,8 @@ impl<C: Communicator> Simulation<C> {
             .outputs
             .spectra_every_time
             .map(|dt| SpectraObserver::new(dt, t0, root.then(|| out.join("spectra"))));
-        let files = FileOutputs::new(&self.outputs, self.scene.case, out, t0)?;
+        let fixed_h = self.scene.config.scheme.fixed_h;
+        let files = FileOutputs::new(&self.outputs, self.scene.case, out, t0, fixed_h)?;
         if files.any() && root {
             files.create_dirs()?;
         }

@@ -520,6 +520,61 @@ fn a_block_step_run_writes_a_row_per_synchronisation_step() {
     assert_eq!(summary["t_end"].as_f64(), Some(0.05));
 }
 
+/// Block time steps with smoothing lengths held fixed (the square
+/// patch): a snapshot between sub-steps keeps every h as it is (the drift
+/// does not change it there), while the density is predicted to the time.
+#[test]
+fn a_fixed_h_block_step_snapshot_keeps_h() {
+    use sph_io::{FieldData, H5Part, Selection, SnapshotReader};
+    let dir = scratch("square-patch-block-snapshot-at");
+    common::ok(&[
+        "square-patch",
+        "-n",
+        "8",
+        "-q",
+        "--time-steps",
+        "block",
+        "--end-time",
+        "0.01",
+        "--snapshot-at",
+        "0.00123",
+        "--snapshot-fields",
+        "id,h,rho",
+        "--write-particles",
+        "--out",
+        s(&dir),
+    ]);
+    let snap: Vec<PathBuf> = std::fs::read_dir(dir.join("snapshots"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert_eq!(snap.len(), 1, "{snap:?}");
+    let mid = H5Part.read_step(&snap[0], 0, &Selection::All).unwrap();
+    assert_eq!(mid.time, 0.00123);
+    let Some(FieldData::F64(h)) = mid.field("h") else {
+        panic!("no h")
+    };
+    // The final state's h, by id (fixed: the same as at every time).
+    let text = std::fs::read_to_string(dir.join("particles.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let (ci, ch) = (
+        header.iter().position(|&c| c == "id").unwrap(),
+        header.iter().position(|&c| c == "h").unwrap(),
+    );
+    let mut h_end = std::collections::HashMap::new();
+    for l in lines {
+        let f: Vec<&str> = l.split(',').collect();
+        h_end.insert(f[ci].parse::<u64>().unwrap(), f[ch].parse::<f64>().unwrap());
+    }
+    let Some(FieldData::U64(ids)) = mid.field("id") else {
+        panic!("no id")
+    };
+    for (id, hv) in ids.iter().zip(h) {
+        assert_eq!(*hv, h_end[id], "particle {id}");
+    }
+}
+
 /// Block time steps: a snapshot asked for at t = 0.0123, inside a
 /// sub-step, holds that time exactly, and positions where the drift puts
 /// them then: on the line between the states at the sub-step's ends

@@ -107,16 +107,24 @@ pub struct FileOutputs {
     pause: Option<checkpoint::TestPause>,
     /// A checkpoint fell due and waits for a synchronisation point.
     checkpoint_latched: bool,
+    /// The scheme keeps h fixed: a snapshot between sub-steps leaves h.
+    fixed_h: bool,
 }
 
 impl FileOutputs {
     /// The files `o` asks for of a run of `case` writing into `out`, with
     /// time schedules counted from `t0` (a resumed run's start time, else
-    /// -inf).
+    /// -inf); `fixed_h`: the scheme keeps smoothing lengths fixed.
     ///
     /// # Errors
     /// A bad test hook ([`checkpoint::TestPause::from_env`]).
-    pub fn new(o: &Outputs, case: &str, out: &Path, t0: f64) -> Result<Self, AppError> {
+    pub fn new(
+        o: &Outputs,
+        case: &str,
+        out: &Path,
+        t0: f64,
+        fixed_h: bool,
+    ) -> Result<Self, AppError> {
         let (every, keep) = match o.checkpoints {
             Some((e, k)) => (Some(e), k),
             None => (None, 0),
@@ -151,6 +159,7 @@ impl FileOutputs {
             summary: IoSummary::default(),
             pause,
             checkpoint_latched: false,
+            fixed_h,
         })
     }
 
@@ -199,11 +208,14 @@ impl<C: Communicator> StepObserver<C> for FileOutputs {
                 .zip(time_due)
                 .map(|(b, t_out)| (b, t_out.clamp(view.report.t, t)));
             let t_snap = at.map_or(t, |(_, t_out)| t_out);
+            let fixed_h = files.fixed_h;
             let field = |name: &str| -> Result<FieldData, AppError> {
                 let mut data =
                     snapfile::field(p, owned.clone(), name).expect("checked by set_outputs");
                 if let (Some((b, t_out)), FieldData::F64(v)) = (at, &mut data) {
-                    predict_field(p, owned.clone(), view.bbox, &b, t, t_out, name, v)?;
+                    if !(name == "h" && fixed_h) {
+                        predict_field(p, owned.clone(), view.bbox, &b, t, t_out, name, v)?;
+                    }
                 }
                 Ok(data)
             };
