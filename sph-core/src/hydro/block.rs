@@ -118,9 +118,10 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
     /// The time line of a block-step run, from the current time to
     /// `t_end` (the run's end), with the longest step
     /// [`TimestepParams::dt_max`](crate::TimestepParams::dt_max) (an
-    /// eighth of the span when unset). Every synchronisation point starts
-    /// a new line whose steps are the smallest criterion step times
-    /// powers of two, the last one ending exactly at `t_end`. Call it
+    /// eighth of the span when unset). A synchronisation point may start
+    /// a new line (one step for every particle where a scene needs about
+    /// the same step everywhere); the last line ends exactly at `t_end`.
+    /// Call it
     /// before the first step (a restored run: before its first step after
     /// the restore, which keeps the restored line and its longest step
     /// and ends at this `t_end`); global runs ignore it.
