@@ -148,6 +148,9 @@ pub fn snapshot(
             .set_attr(TIME_LINE_TICK, Attr::I64(b.ti as i64))
             .set_attr(PARTICLE_UPDATES, Attr::I64(b.updates as i64))
             .set_attr(DOMAIN_SYNCS, Attr::I64(b.syncs as i64));
+        if b.ramp_origin.is_finite() {
+            snap.set_attr(TIME_LINE_RAMP_ORIGIN, Attr::F64(b.ramp_origin));
+        }
     }
     for name in fields(p) {
         if let Some(data) = field(p, owned.clone(), name) {
@@ -161,6 +164,9 @@ pub fn snapshot(
 pub const TIME_LINE: &str = "time_line";
 /// Attribute of block-step runs: the longest step any particle may take.
 pub const TIME_LINE_DT_MAX: &str = "time_line_dt_max";
+/// Attribute of block-step runs with a start ramp: its origin (absent:
+/// no ramp).
+pub const TIME_LINE_RAMP_ORIGIN: &str = "time_line_ramp_origin";
 /// Attribute of block-step runs: the longest step's bin.
 pub const TIME_LINE_TOP_BIN: &str = "time_line_top_bin";
 /// Attribute of block-step runs: the tick of the checkpoint (a
@@ -379,8 +385,14 @@ fn block_run(rows: &Snapshot) -> Result<Option<BlockRun>, String> {
                     ))
                 }
             };
+            let ramp_origin = match rows.attr(TIME_LINE_RAMP_ORIGIN) {
+                None => f64::NEG_INFINITY,
+                Some(Attr::F64(v)) if v.is_finite() => *v,
+                other => return Err(format!("{TIME_LINE_RAMP_ORIGIN} is {other:?}, not a time")),
+            };
             Ok(Some(BlockRun {
                 t_begin: span[0],
+                ramp_origin,
                 t_end: span[1],
                 dt_max_bin: top,
                 dt_max,

@@ -104,6 +104,14 @@ impl crate::Choice for TimeSteps {
 /// growing), or the criteria's step at once. Either way `dt0` is the
 /// integrator's previous step (the first velocity update reads
 /// `v_0 + a_0 dt0 / 2`). A resumed run continues from its checkpoint.
+///
+/// Under block time steps the ramp is that of the global run in time,
+/// `dt <= (max_growth - 1) (t - t0) + dt0` (the global ramp's step at
+/// `t`), but it holds no particle more than the limiter's factor below
+/// its own criteria: a blast's hot centre starts two bins down and
+/// catches up as the ramp grows, the cold gas keeps its long steps
+/// (measured: Sedov 12^3 at Courant 0.5 / 1.0 energy drift 2.7e-3 /
+/// 3.0e-3 against 1.2e-2 / 2.6e-2 without it).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[non_exhaustive]
 pub enum FirstStep {
@@ -130,7 +138,9 @@ impl crate::Choice for FirstStep {
         match self {
             FirstStep::Ramp => {
                 "At most 1.1 times the case's first dt, growing by 1.1 per step until a \
-                 time-step criterion takes over (SPH-EXA's start)"
+                 time-step criterion takes over (SPH-EXA's start); under block steps the same \
+                 ramp in time, holding no particle more than the limiter's factor below its \
+                 criteria"
             }
             FirstStep::Criteria => {
                 "The time-step criteria's step at once (Courant, density change, acceleration, \

@@ -206,3 +206,25 @@ fn block_steps_do_not_depend_on_the_thread_count() {
     };
     assert_same_bits(&go(1), &go(2), &["x", "vx", "u", "rho", "bin"]);
 }
+
+#[test]
+fn the_start_ramp_holds_a_blast_at_most_the_limiters_factor_down() {
+    // The first sub-step of a blast from rest, with the ramp from dt0
+    // (the default) and without it (`FirstStep::Criteria`).
+    let mut ramp = config(TimeSteps::Block, true);
+    ramp.timestep.first_step = FirstStep::Ramp;
+    let (_, with) = run(ramp, blast, 1.0, 1);
+    let (_, without) = run(config(TimeSteps::Block, true), blast, 1.0, 1);
+    let (with, without) = (&with[0].after, &without[0].after);
+    // Never longer than the criteria's bin, never more than the
+    // limiter's factor (two bins) below it.
+    for (i, (&r, &c)) in with.iter().zip(without).enumerate() {
+        assert!(r <= c && r >= c - 2.0, "particle {i}: bin {r} against {c}");
+    }
+    // The hot centre is held two bins down (the ramp's step from dt0 =
+    // 1e-4 is far below its criteria); the bins still spread.
+    let (centre, corner) = (with.iter().cloned().fold(f64::INFINITY, f64::min), with[0]);
+    let hot_free = without.iter().cloned().fold(f64::INFINITY, f64::min);
+    assert_eq!(centre, hot_free - 2.0, "the ramp binds at the centre");
+    assert!(corner > centre + 2.0, "bins {centre} to {corner}");
+}

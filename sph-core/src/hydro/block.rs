@@ -38,7 +38,7 @@ use super::{grow_open_axes, BlockRun, Hydro, StepReport};
 use crate::conserved::Conserved;
 use crate::pair_loop::{neighbour_lanes, F64s, Group, PairLoop, PairStage};
 use crate::timeline::{is_active, step_begin, Bin, Ticks, TimeLine, LINE, MAX_BIN};
-use crate::timestep::{DtLimit, TimeSteps};
+use crate::timestep::{DtLimit, FirstStep, TimeSteps};
 use crate::{CoreError, Particles};
 use rayon::prelude::*;
 use sph_comm::{Communicator, ReduceOp};
@@ -56,6 +56,11 @@ pub(super) struct BlockState {
     pub(super) line: Option<TimeLine>,
     /// The run's end: the last line ends there.
     run_end: f64,
+    /// The start ramp's origin `t_r`: no particle's step exceeds
+    /// `(max_growth - 1) (t - t_r)`, the global ramp's step at `t`, nor
+    /// is held by it more than the limiter's factor below its own
+    /// criteria (`-inf`: no ramp, `--first-step criteria`).
+    pub(super) ramp_origin: f64,
     /// The longest step any particle may take.
     dt_cap: f64,
     /// The current tick.
@@ -135,6 +140,14 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             return Ok(());
         }
         let span = t_end - self.t;
+        let ts = self.config.timestep;
+        // The global ramp's steps: dt0 g^n at t_n = t0 + dt0 (g^n - 1) / (g - 1),
+        // i.e. (g - 1) (t_n - t_r) with this origin.
+        self.block.ramp_origin = if ts.first_step == FirstStep::Ramp && ts.max_growth > 1.0 {
+            self.t - self.dt_prev / (ts.max_growth - 1.0)
+        } else {
+            f64::NEG_INFINITY
+        };
         let dt_max = self.config.timestep.dt_max.unwrap_or(span / 8.0);
         self.block.line = Some(TimeLine::new(self.t, t_end, dt_max)?);
         self.block.dt_cap = dt_max;
@@ -179,6 +192,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             t_end: line.time(LINE),
             dt_max_bin: line.dt_max_bin().0,
             dt_max: self.block.dt_cap,
+            ramp_origin: self.block.ramp_origin,
             ti: self.block.ti,
             updates: self.block.updates,
             syncs: self.block.syncs,
@@ -198,6 +212,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         }
         self.block.line = Some(line);
         self.block.dt_cap = b.dt_max;
+        self.block.ramp_origin = b.ramp_origin;
         self.block.run_end = b.t_end;
         self.block.ti = b.ti;
         self.block.started = true;
@@ -649,6 +664,10 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         let energy = self.config.eos.uses_internal_energy();
         let gravity = self.gravity.is_some();
         let active = &b.active;
+        // The start ramp, never more than the limiter's factor below a
+        // particle's own criteria.
+        let ramp = (ts.max_growth - 1.0) * (self.t - b.ramp_origin);
+        let depth = f64::from(1u32 << ts.limiter_delta.min(31));
         b.dt_criteria.clear();
         b.dt_criteria.resize(owned.len(), f64::INFINITY);
         b.dt_criteria
@@ -665,7 +684,8 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 } else {
                     0.0
                 };
-                *out = ts.particle_dt(hv[i], comp[i], acc, cooling);
+                let own = ts.particle_dt(hv[i], comp[i], acc, cooling);
+                *out = own.min(ramp.max(own / depth));
             });
     }
 

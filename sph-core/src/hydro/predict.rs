@@ -38,7 +38,7 @@ pub const PREDICTED: [&str; 9] = ["x", "y", "z", "vx", "vy", "vz", "u", "rho", "
 /// p.x[0] = 0.5;
 /// p.vx[0] = 0.8;
 /// p.ax[0] = 2.0;
-/// let run = BlockRun { t_begin: 0.0, t_end: 1.0, dt_max_bin: 49, dt_max: 0.125, ti: 0, updates: 0, syncs: 0 };
+/// let run = BlockRun { t_begin: 0.0, t_end: 1.0, dt_max_bin: 49, dt_max: 0.125, ramp_origin: f64::NEG_INFINITY, ti: 0, updates: 0, syncs: 0 };
 /// let bbox = BoundingBox::cube(0.0, 1.0, Boundary::Periodic).unwrap();
 /// let mut x = vec![p.x[0]];
 /// assert!(predict_field(&p, 0..1, &bbox, &run, 0.25, 0.25 - 1.0 / 16.0, "x", &mut x).unwrap());

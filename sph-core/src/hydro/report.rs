@@ -214,6 +214,9 @@ pub struct BlockRun {
     pub dt_max_bin: u8,
     /// The longest step any particle may take (every new line's cap).
     pub dt_max: f64,
+    /// The start ramp's origin: no step exceeds `(max_growth - 1) (t -
+    /// ramp_origin)` (`-inf`: no ramp).
+    pub ramp_origin: f64,
     /// The current tick.
     pub ti: u64,
     /// Particle updates so far.
