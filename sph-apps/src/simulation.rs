@@ -153,10 +153,15 @@ pub struct TimeBin {
 
 /// Whether a run of `hydro` has reached `stop`; if not, with an end time,
 /// the next step is cut to land on it.
-fn stop_reached<C: Communicator>(hydro: &mut Hydro<FastKernel, C>, stop: Stop) -> bool {
+fn stop_reached<C: Communicator>(
+    hydro: &mut Hydro<FastKernel, C>,
+    stop: Stop,
+    line_end: Option<f64>,
+) -> bool {
     let t = hydro.time();
     match stop {
-        Stop::Steps(s) => hydro.steps() >= s,
+        // Block steps: the time line's end is the run's at the latest.
+        Stop::Steps(s) => hydro.steps() >= s || line_end.is_some_and(|te| t >= te * (1.0 - 1e-12)),
         Stop::Time(te) if t >= te * (1.0 - 1e-12) => true,
         Stop::Time(te) => {
             hydro.limit_next_dt(te - t);
@@ -413,6 +418,7 @@ impl<C: Communicator> Simulation<C> {
         // Block time steps: the run's end (a restored run keeps the line
         // of its checkpoint up to its next synchronisation point, which
         // is its first sub-step).
+        let mut line_end = None;
         if self.scene.config.time_steps.on_time_line() {
             let end = match stop {
                 Stop::Time(te) => Some(te),
@@ -424,11 +430,12 @@ impl<C: Communicator> Simulation<C> {
                 )
             })?;
             self.hydro.set_time_line(end)?;
+            line_end = Some(end);
         }
         let mut tally = Tally::new(n);
         let start = outputs.start;
         let mut observers = outputs.observers(self.watch.as_mut());
-        while !stop_reached(&mut self.hydro, stop) {
+        while !stop_reached(&mut self.hydro, stop, line_end) {
             let r = self
                 .hydro
                 .step(&mut self.scene.particles, &mut self.scene.bbox)

@@ -155,6 +155,8 @@ fn a_tiny_sedov_run_writes_its_outputs() {
     let out = sphexa(&[
         "run",
         "sedov",
+        "--time-steps",
+        "global",
         "-n",
         "8",
         "--steps",
@@ -217,7 +219,19 @@ fn run_help_names_every_preset() {
 /// `conserved.csv` of a tiny Sedov run with `extra` options.
 fn tiny_sedov(name: &str, extra: &[&str]) -> String {
     let dir = scratch(name).join("out");
-    let mut args = vec!["run", "sedov", "-n", "8", "--steps", "3", "-q", "--out"];
+    // Global steps: these compare schemes and first steps step by step.
+    let mut args = vec![
+        "run",
+        "sedov",
+        "--time-steps",
+        "global",
+        "-n",
+        "8",
+        "--steps",
+        "3",
+        "-q",
+        "--out",
+    ];
     args.push(dir.to_str().expect("UTF-8 path"));
     args.extend_from_slice(extra);
     let out = sphexa(&args);

@@ -47,7 +47,7 @@ fn a_restarted_run_continues_bit_identically() {
         "id,x,y,z,vx,vy,vz,h,u,rho,p,du_prev",
     ];
     let run = |out: &Path, extra: &[&str]| {
-        let mut args = vec!["sedov", "--out", s(out)];
+        let mut args = vec!["sedov", "--time-steps", "global", "--out", s(out)];
         args.extend_from_slice(&common);
         args.extend_from_slice(extra);
         ok(&args);
@@ -137,8 +137,9 @@ fn a_restarted_block_step_run_continues_bit_identically() {
         written.len() >= 2 && !written.contains(&"checkpoint_00000010.h5".to_string()),
         "{written:?}"
     );
-    let ckpt = b.join("checkpoints/checkpoint_00000051.h5");
-    assert!(ckpt.exists(), "{:?}", listing(&b));
+    // The last checkpoint of the run stopped after 55 sub-steps.
+    let last = listing(&b).pop().expect("a checkpoint of the 55 sub-steps");
+    let ckpt = b.join("checkpoints").join(last);
     let e = refused(&["--restart", s(&ckpt), "--time-steps", "global", "-q"]);
     assert!(e.contains("block-step"), "{e}");
     ok(&["--restart", s(&ckpt), "--end-time", "0.05", "-q"]);
@@ -149,9 +150,12 @@ fn a_restarted_block_step_run_continues_bit_identically() {
         );
         assert!(fa == fb, "{file} differs after the restart");
     }
+    // The end's checkpoint (the same sub-step in both).
+    let end = listing(&a).pop().expect("checkpoints of the straight run");
+    assert_eq!(listing(&b).last(), Some(&end));
     assert_same_state(
-        &read(&a.join("checkpoints/checkpoint_00000064.h5")),
-        &read(&b.join("checkpoints/checkpoint_00000064.h5")),
+        &read(&a.join("checkpoints").join(&end)),
+        &read(&b.join("checkpoints").join(&end)),
         "the last checkpoint",
     );
     // Another end: the run starts a new time line at its first sub-step
@@ -187,6 +191,8 @@ fn a_killed_run_restarts_from_its_last_complete_checkpoint() {
         [
             "run",
             "sedov",
+            "--time-steps",
+            "global",
             "-n",
             "16",
             "-q",
@@ -278,7 +284,7 @@ fn a_run_repeats_from_its_config_and_the_command_line_overrides_the_file() {
     std::fs::write(
         &file,
         format!(
-            "case = \"sedov\"\nside = 8\nsteps = 5\nalpha = 0.5\nav-switches = \"on\"\nquiet = true\nsnapshot-at = [0.0]\nout = \"{}\"\n",
+            "case = \"sedov\"\nside = 8\nsteps = 5\ntime-steps = \"global\"\nalpha = 0.5\nav-switches = \"on\"\nquiet = true\nsnapshot-at = [0.0]\nout = \"{}\"\n",
             s(&dir.join("never"))
         ),
     )
@@ -319,7 +325,18 @@ fn a_run_repeats_from_its_config_and_the_command_line_overrides_the_file() {
     assert_eq!(conserved(&first), conserved(&again));
     // And it differs from the defaults (the file's alpha and switches apply).
     let plain = dir.join("plain");
-    ok(&["sedov", "-n", "8", "--steps", "3", "-q", "--out", s(&plain)]);
+    ok(&[
+        "sedov",
+        "--time-steps",
+        "global",
+        "-n",
+        "8",
+        "--steps",
+        "3",
+        "-q",
+        "--out",
+        s(&plain),
+    ]);
     assert_ne!(conserved(&first), conserved(&plain));
 }
 
@@ -398,6 +415,8 @@ fn auto_checkpoints_report_the_young_daly_interval() {
     let dir = scratch("auto");
     ok(&[
         "sedov",
+        "--time-steps",
+        "global",
         "-n",
         "8",
         "--steps",
@@ -453,6 +472,8 @@ fn an_sphexa_layout_file_is_read_as_initial_conditions() {
     let (from_file, own) = (dir.join("from-file"), dir.join("own"));
     ok(&[
         "sedov",
+        "--time-steps",
+        "global",
         "--init",
         s(&file),
         "--steps",
@@ -461,7 +482,18 @@ fn an_sphexa_layout_file_is_read_as_initial_conditions() {
         "--out",
         s(&from_file),
     ]);
-    ok(&["sedov", "-n", "10", "--steps", "3", "-q", "--out", s(&own)]);
+    ok(&[
+        "sedov",
+        "--time-steps",
+        "global",
+        "-n",
+        "10",
+        "--steps",
+        "3",
+        "-q",
+        "--out",
+        s(&own),
+    ]);
     let conserved = |d: &Path| std::fs::read_to_string(d.join("conserved.csv")).unwrap();
     assert_eq!(conserved(&from_file).lines().count(), 4);
     assert_eq!(conserved(&from_file), conserved(&own));
@@ -516,7 +548,16 @@ fn a_swift_layout_file_is_read_as_initial_conditions() {
     write_swift(&file, &gas).unwrap();
     let (from_file, own) = (dir.join("from-file"), dir.join("own"));
     let run = |extra: &[&str], out: &Path| {
-        let mut args = vec!["sedov", "--steps", "3", "-q", "--out", s(out)];
+        let mut args = vec![
+            "sedov",
+            "--time-steps",
+            "global",
+            "--steps",
+            "3",
+            "-q",
+            "--out",
+            s(out),
+        ];
         args.extend_from_slice(extra);
         ok(&args);
     };
@@ -583,6 +624,8 @@ fn a_swift_snapshot_holds_the_state_of_ours() {
     let run = |out: &Path, extra: &[&str]| {
         let mut args = vec![
             "sedov",
+            "--time-steps",
+            "global",
             "-n",
             "10",
             "--steps",
@@ -636,6 +679,8 @@ fn a_swift_snapshot_holds_the_state_of_ours() {
     let again = dir.join("again");
     ok(&[
         "sedov",
+        "--time-steps",
+        "global",
         "--init",
         s(&theirs.join("snapshots/snapshot_00000004.hdf5")),
         "--steps",
@@ -678,6 +723,8 @@ fn every_case_restarts_bit_identically() {
         let run = |out: &Path, steps: &str| {
             ok(&[
                 case,
+                "--time-steps",
+                "global",
                 "-n",
                 side,
                 "-q",
@@ -713,6 +760,8 @@ fn our_snapshot_is_read_as_initial_conditions() {
     let first = dir.join("first");
     ok(&[
         "sedov",
+        "--time-steps",
+        "global",
         "-n",
         "8",
         "--steps",
@@ -736,6 +785,8 @@ fn our_snapshot_is_read_as_initial_conditions() {
     let second = dir.join("second");
     ok(&[
         "sedov",
+        "--time-steps",
+        "global",
         "--init",
         s(&file),
         "--steps",

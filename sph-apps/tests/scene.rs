@@ -61,7 +61,8 @@ fn a_blast_runs_as_the_case_with_the_same_physics() {
     ];
     let with_attrs = write_case("sedov", 10, &dir, "blast.h5", &attrs);
     let bare = write_case("sedov", 10, &dir, "bare.h5", &[]);
-    let steps = ["--steps", "6", "-q"];
+    // Global steps: a scene stopped by --steps alone steps globally.
+    let steps = ["--steps", "6", "-q", "--time-steps", "global"];
     let run = |out: &Path, args: &[&str]| {
         let mut all = args.to_vec();
         all.extend_from_slice(&steps);
@@ -171,7 +172,15 @@ fn an_isolated_sphere_runs_with_the_gravity_it_is_given() {
         ("gamma", AttrValue::F64(5.0 / 3.0)),
     ];
     let file = write_case("evrard", 10, &dir, "sphere.h5", &attrs);
-    let same = ["--courant", "0.3", "--steps", "5", "-q"];
+    let same = [
+        "--courant",
+        "0.3",
+        "--steps",
+        "5",
+        "-q",
+        "--time-steps",
+        "global",
+    ];
     let run = |out: &Path, args: &[&str]| {
         let mut all = args.to_vec();
         all.extend_from_slice(&same);

@@ -1,5 +1,6 @@
-//! `sphexa stress --quick` (the CI subset of the suite) passes, and writes
-//! stress.json with a verdict and figures for every scenario.
+//! `sphexa stress --quick` (the CI subset of the suite) passes under block
+//! and global time steps, and writes stress.json with a verdict and figures
+//! for every scenario.
 
 mod common;
 
@@ -8,10 +9,19 @@ use std::path::PathBuf;
 
 #[test]
 fn the_quick_stress_suite_passes() {
-    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("stress-quick");
+    // Block time steps (the default) and one global step.
+    quick_suite_passes(&[]);
+    quick_suite_passes(&["--time-steps", "global"]);
+}
+
+fn quick_suite_passes(extra: &[&str]) {
+    let out =
+        PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("stress-quick{}", extra.join("")));
     std::fs::remove_dir_all(&out).ok();
     let o = sphexa_command()
-        .args(["stress", "--quick", "--threads", "2", "--out"])
+        .args(["stress", "--quick", "--threads", "2"])
+        .args(extra)
+        .arg("--out")
         .arg(&out)
         .output()
         .expect("sphexa runs");

@@ -21,7 +21,7 @@
 
 use crate::reference::{FlowState, Gresho, Noh, Riemann, Sedov};
 use crate::AppError;
-use sph_core::{FieldSet, HydroConfig, Particles};
+use sph_core::{FieldSet, HydroConfig, Particles, TimeSteps};
 use sph_tree::BoundingBox;
 
 pub mod scene;
@@ -125,6 +125,17 @@ pub trait Case: Sync + std::fmt::Debug {
 
     /// The scheme the case runs with unless overridden.
     fn default_scheme(&self) -> Scheme;
+
+    /// How the case's particles share time steps unless `--time-steps`
+    /// says otherwise: block steps, or one global step where the case
+    /// stirs (block steps do not cover turbulence driving yet).
+    fn default_time_steps(&self) -> TimeSteps {
+        if self.physics().stirring.is_some() {
+            TimeSteps::Global
+        } else {
+            TimeSteps::Block
+        }
+    }
 
     /// The equation of state and self-gravity of the case (default: an
     /// ideal gas with gamma = 5/3, no self-gravity).

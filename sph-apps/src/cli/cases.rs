@@ -24,9 +24,10 @@ pub(crate) fn list_cases() {
             c.description()
         );
         say!(
-            "{:<14} scheme: {}",
+            "{:<14} scheme: {} --time-steps {}",
             "",
-            scheme_options(&c.default_scheme(), c.physics())
+            scheme_options(&c.default_scheme(), c.physics()),
+            sph_core::Choice::name(&c.default_time_steps())
         );
     }
     say!("\nscheme presets (sphexa run CASE --scheme NAME):");

@@ -20,12 +20,12 @@ pub(crate) struct StressArgs {
     /// Output folder (default out/stress): stress.json and each run's files.
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
-    /// How particles share time steps in every scenario: `global` (one
-    /// step for all, the default) or `block` (each particle its own
-    /// power-of-two step, with the limiter); under `block` a scenario's
-    /// step count counts sub-steps. Each scenario's `particle_updates`
-    /// figure in stress.json compares the two.
-    #[arg(long, value_parser = choice::<TimeSteps>(), default_value = "global")]
+    /// How particles share time steps in every scenario: `block` (each
+    /// particle its own power-of-two step, with the limiter; the default,
+    /// as in `sphexa run`) or `global` (one step for all); under `block`
+    /// a scenario's step count counts sub-steps. Each scenario's
+    /// `particle_updates` figure in stress.json compares the two.
+    #[arg(long, value_parser = choice::<TimeSteps>(), default_value = "block")]
     time_steps: TimeSteps,
 }
 

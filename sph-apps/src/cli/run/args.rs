@@ -118,15 +118,20 @@ pub(crate) struct RunArgs {
     /// fewer to t = 0.05.
     #[arg(long, value_parser = choice::<FirstStep>())]
     pub(crate) first_step: Option<FirstStep>,
-    /// How particles share time steps (default: global). `block` gives
-    /// each particle its own power-of-two fraction of a longest step
-    /// (`--dt-max`), with a limiter: a blast's cold gas then takes a few
-    /// long steps while the shock takes many short ones. `kdk`: the same
-    /// integrator with every particle in the smallest bin. `block` covers
-    /// every scheme and equation of state, with or without self-gravity,
-    /// but not turbulence driving yet; snapshots asked for at a time hold
-    /// the state at that time, checkpoints wait for a synchronisation
-    /// point (`docs/block-timesteps.md`).
+    /// How particles share time steps (default: the case's, `block`;
+    /// `global` where the run stirs, for a restart of a global run's
+    /// checkpoint, and for a scene of your own stopped by `--steps`
+    /// alone). `block` gives each particle its own power-of-two fraction
+    /// of a longest step (`--dt-max`), with a limiter: a blast's cold gas
+    /// then takes a few long steps while the shock takes many short ones;
+    /// `--steps N` counts its sub-steps and the run stops at the end time
+    /// at the latest. `global`: one step for all, the seed paper's and
+    /// SPH-EXA's integrator. `kdk`: the block integrator with every
+    /// particle in the smallest bin. `block` covers every scheme and
+    /// equation of state, with or without self-gravity, but not
+    /// turbulence driving yet; snapshots asked for at a time hold the
+    /// state at that time, checkpoints wait for a synchronisation point
+    /// (`docs/block-timesteps.md`).
     #[arg(long, value_parser = choice::<TimeSteps>())]
     pub(crate) time_steps: Option<TimeSteps>,
     /// Block time steps: the longest step a particle may take (default:

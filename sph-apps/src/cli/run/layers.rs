@@ -95,6 +95,11 @@ pub(crate) fn layered(cli: RunArgs, m: &ArgMatches) -> Result<RunArgs, AppError>
             for key in ["restart", "init", "config"] {
                 table.remove(key);
             }
+            // Written before block steps became the default: the run
+            // that wrote it stepped globally.
+            table
+                .entry("time-steps")
+                .or_insert_with(|| toml::Value::String("global".into()));
             layers.push((source, table));
         }
     }

@@ -17,7 +17,7 @@ use crate::{cases, checkpoint, AppError, Simulation};
 use args::{CurveArg, FormatArg, RunArgs, DEFAULT_MOMENTUM_BOUND};
 use clap::ArgMatches;
 use sph_comm::Communicator;
-use sph_core::HydroConfig;
+use sph_core::{HydroConfig, TimeSteps};
 use sph_kernels::FastKernel;
 use sph_tree::Curve;
 use std::path::PathBuf;
@@ -143,6 +143,23 @@ fn user_scene(
     cases::scene::UserScene::resolve(source, file, &opts, a.end_time.unwrap_or(f64::INFINITY))
 }
 
+/// The time steps of a run that does not name them: the case's (block
+/// steps, global where it stirs), global where `--stir` asks for driving
+/// (not covered by block steps yet) or where a scene of the user's own
+/// stops after `--steps` alone (block steps need an end time for their
+/// time line).
+fn default_time_steps(a: &RunArgs, case: &dyn cases::Case, user_scene: bool) -> TimeSteps {
+    let stirs = a
+        .stir
+        .as_ref()
+        .map_or(case.physics().stirring.is_some(), |s| s.0.is_some());
+    if stirs || (user_scene && a.end_time.is_none()) {
+        TimeSteps::Global
+    } else {
+        case.default_time_steps()
+    }
+}
+
 /// Runs the case of the resolved options `a`.
 fn execute(a: RunArgs) -> Result<(), AppError> {
     let user_scene = match (&a.case, &a.init, &a.restart) {
@@ -217,7 +234,9 @@ fn execute(a: RunArgs) -> Result<(), AppError> {
     config.neighbors.ng0 = a.ng0;
     config.neighbors.ngmax = a.ngmax;
     config.bin_report = a.report_bins;
-    config.time_steps = a.time_steps.unwrap_or_default();
+    config.time_steps = a
+        .time_steps
+        .unwrap_or_else(|| default_time_steps(&a, case, user_scene.is_some()));
     config.timestep.dt_max = a.dt_max;
     if let Some(on) = a.limiter {
         config.timestep.limiter = on;

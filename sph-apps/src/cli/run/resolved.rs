@@ -95,9 +95,11 @@ pub(crate) fn resolved_config(
         "first-step",
         Value::String(config.timestep.first_step.name().into()),
     );
+    // Always: a checkpoint's configuration without the key is from a run
+    // before block steps were the default, a global one.
+    set("time-steps", Value::String(config.time_steps.name().into()));
     // Block-step runs only: others keep their config.toml.
     if config.time_steps.on_time_line() {
-        set("time-steps", Value::String(config.time_steps.name().into()));
         if let Some(d) = config.timestep.dt_max {
             set("dt-max", Value::Float(d));
         }
