@@ -671,3 +671,35 @@ fn a_block_step_snapshot_lands_at_the_requested_time() {
         "largest departure from the drift line {worst:e}"
     );
 }
+
+/// Block time steps are each case's default, named in `config.toml`;
+/// a run that stirs steps globally (block steps do not cover driving
+/// yet), as one that asks for it does; under block steps `--steps N`
+/// stops at the case's end time at the latest.
+#[test]
+fn cases_run_block_time_steps_unless_they_stir() {
+    let run = |name: &str, extra: &[&str]| -> (String, serde_json::Value) {
+        let dir = scratch(name);
+        let mut args = vec!["sedov", "-n", "8", "-q", "--out", s(&dir)];
+        args.extend_from_slice(extra);
+        common::ok(&args);
+        let config = std::fs::read_to_string(dir.join("config.toml")).unwrap();
+        let line = config
+            .lines()
+            .find(|l| l.starts_with("time-steps"))
+            .unwrap_or_else(|| panic!("no time-steps in {config}"))
+            .to_owned();
+        let summary = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+        (line, serde_json::from_str(&summary).unwrap())
+    };
+    let (block, _) = run("default-block", &["--steps", "2"]);
+    assert_eq!(block, r#"time-steps = "block""#);
+    let (stirred, _) = run("default-stirred", &["--steps", "2", "--stir", "on"]);
+    assert_eq!(stirred, r#"time-steps = "global""#);
+    let (asked, _) = run("asked-global", &["--steps", "2", "--time-steps", "global"]);
+    assert_eq!(asked, r#"time-steps = "global""#);
+    // The case's end time, 0.05, comes first.
+    let (_, summary) = run("steps-past-end", &["--steps", "100000"]);
+    assert_eq!(summary["t_end"].as_f64(), Some(0.05), "{summary}");
+    assert!(summary["steps"].as_u64().unwrap() < 100000, "{summary}");
+}
