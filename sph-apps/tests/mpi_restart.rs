@@ -170,7 +170,8 @@ fn restarted_on_one_and_four(case: &str, options: &[&str], [at, steps]: [usize; 
 
 /// Initial conditions from files on several ranks, each rank reading its
 /// share: an SPH-EXA-layout file (no checksums) and one of our snapshots
-/// give on 2 ranks the conserved quantities of the serial run.
+/// give on 2 ranks the conserved quantities of the serial run (global
+/// steps: a row per step).
 #[test]
 fn initial_conditions_from_files_on_two_ranks() {
     use hdf5_pure::AttrValue;
@@ -208,6 +209,8 @@ fn initial_conditions_from_files_on_two_ranks() {
             ranks,
             &[
                 "sedov",
+                "--time-steps",
+                "global",
                 "--init",
                 foreign,
                 "--steps",
@@ -232,6 +235,8 @@ fn initial_conditions_from_files_on_two_ranks() {
             ranks,
             &[
                 "sedov",
+                "--time-steps",
+                "global",
                 "--init",
                 ours,
                 "--steps",
