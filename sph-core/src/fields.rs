@@ -402,6 +402,10 @@ pub struct Particles {
     /// The optional fields held (on every rank alike, even one that holds
     /// no particles right now, so that messages agree).
     pub(crate) fields: FieldSet,
+    /// Block time steps: the next sort may reset the held fields (all but
+    /// `rho`) instead of moving them, because every particle recomputes
+    /// them before they are read (a sub-step where all are active).
+    pub(crate) held_recomputed: bool,
 }
 
 /// Every per-particle field, in the order of snapshot listings; migration
@@ -489,8 +493,15 @@ pub(crate) fn sent(set: FieldSet, history: bool) -> impl Iterator<Item = &'stati
 /// for the sent ones (taken from the message; a halo's history is 0),
 /// `Some(fill)` for the derived ones.
 pub(crate) fn f64_fields(set: FieldSet) -> impl Iterator<Item = (GetMut<f64>, Kind)> {
+    f64_fields_named(set).map(|(_, get, kind)| (get, kind))
+}
+
+/// As [`f64_fields`], with each field's name.
+pub(crate) fn f64_fields_named(
+    set: FieldSet,
+) -> impl Iterator<Item = (&'static str, GetMut<f64>, Kind)> {
     held(set).filter_map(move |f| match f.column {
-        Column::F64(_, get) => Some((get, kind(f, set))),
+        Column::F64(_, get) => Some((f.name, get, kind(f, set))),
         _ => None,
     })
 }

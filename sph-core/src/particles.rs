@@ -143,9 +143,12 @@ impl Particles {
     /// domain's sort needs: 13 to 17 gathers instead of up to 33).
     pub fn reorder_carried(&mut self, perm: &[u32], scratch: &mut Vec<u64>) {
         assert_eq!(perm.len(), self.len(), "permutation length");
-        for (get, kind) in fields::f64_fields(self.fields) {
+        let held_recomputed = self.held_recomputed;
+        for (name, get, kind) in fields::f64_fields_named(self.fields) {
             match kind {
                 Kind::Derived { fill } => get(self).fill(fill),
+                // The density rate reads the density of the last step.
+                Kind::Held { fill } if held_recomputed && name != "rho" => get(self).fill(fill),
                 _ => apply_permutation_f64(perm, get(self), scratch),
             }
         }
@@ -372,5 +375,43 @@ impl ParticleFields for Particles {
         place_tail(&mut self.id, n_owned, order, n_low, scratch, |v| v, |v| v);
         // nc is recomputed by the next search.
         self.nc.resize(n, 0);
+    }
+}
+
+#[cfg(test)]
+mod held_tests {
+    use super::*;
+
+    /// A sort at a sub-step where every particle recomputes its held
+    /// fields resets them (but the density, which the density rate reads)
+    /// and moves everything else; any other sort moves them.
+    #[test]
+    fn a_sort_resets_the_held_fields_only_where_they_are_recomputed() {
+        let set = FieldSet {
+            block: true,
+            ..FieldSet::default()
+        };
+        let fill = |p: &mut Particles| {
+            for i in 0..p.len() {
+                let v = i as f64 + 1.0;
+                (p.x[i], p.rho[i], p.p[i], p.ax[i], p.du[i]) =
+                    (v, 10.0 * v, 20.0 * v, 30.0 * v, 40.0 * v);
+            }
+        };
+        let perm = [2u32, 0, 1];
+        let mut scratch = Vec::new();
+        let mut moved = Particles::new(3, set);
+        fill(&mut moved);
+        moved.reorder_carried(&perm, &mut scratch);
+        assert_eq!(moved.p, [60.0, 20.0, 40.0]);
+        let mut reset = Particles::new(3, set);
+        fill(&mut reset);
+        reset.held_recomputed = true;
+        reset.reorder_carried(&perm, &mut scratch);
+        assert_eq!(reset.x, [3.0, 1.0, 2.0]);
+        assert_eq!(reset.rho, [30.0, 10.0, 20.0]);
+        for held in [&reset.p, &reset.ax, &reset.du] {
+            assert_eq!(held, &[0.0; 3]);
+        }
     }
 }

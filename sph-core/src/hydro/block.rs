@@ -249,7 +249,12 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         let first = !self.block.started;
         let owned = if first || self.block.sync_due {
             self.release_step_buffers();
-            let owned = self.domain.sync_with(p, bbox, self.next_h_max.take())?;
+            // Where every particle is active, each recomputes its held
+            // fields before any reads them: the sort need not move them.
+            p.held_recomputed = self.block.at_sync_point && !first;
+            let synced = self.domain.sync_with(p, bbox, self.next_h_max.take());
+            p.held_recomputed = false;
+            let owned = synced?;
             clock.lap(Stage::Sync);
             self.tree
                 .rebuild(self.domain.keys(), &p.x, &p.y, &p.z, self.config.bucket)?;
