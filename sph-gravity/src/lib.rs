@@ -110,8 +110,11 @@ pub use traversal::TreeGravity;
 /// criterion is that of the cube about its geometric cell's centre
 /// holding the cell and the node's tight box (its own particles' drift,
 /// not the largest anywhere), and a distributed evaluation demands
-/// `drift` more distance from the receiver's domain. Groups with no
-/// active target are skipped and their outputs left as they were.
+/// `drift` more distance from the receiver's domain. Only the targets'
+/// entries are written: a group with no active target is skipped, and in
+/// one with some the kernels run on its active particles over the whole
+/// group's interaction lists (so a target's field does not depend on
+/// which of its mates are active); every other entry is left as it was.
 ///
 /// ```
 /// use sph_gravity::Targets;

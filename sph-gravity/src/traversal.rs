@@ -135,11 +135,12 @@ impl TreeGravity {
     }
 
     /// [`compute`](Self::compute) for the `targets` only, on a tree whose
-    /// cells may be older than the positions (see [`Targets`]): the
-    /// target groups with an active particle are evaluated whole (so a
-    /// particle's field does not depend on which group mates are active)
-    /// and written; the other groups' entries of `out` are left as they
-    /// were (`out` keeps its contents when its length is `x.len()`).
+    /// cells may be older than the positions (see [`Targets`]): each
+    /// target group with an active particle makes the interaction lists of
+    /// the whole group (so a particle's field does not depend on which
+    /// group mates are active) and evaluates them on its active particles;
+    /// only those entries of `out` are written, the others are left as
+    /// they were (`out` keeps its contents when its length is `x.len()`).
     #[allow(clippy::too_many_arguments)]
     pub fn compute_targets(
         &mut self,
@@ -336,6 +337,13 @@ pub(crate) fn dist2_point_box(p: [f64; 3], lo: [f64; 3], hi: [f64; 3]) -> f64 {
 struct Lists {
     m2p: Vec<NodeId>,
     p2p: Vec<NodeId>,
+    /// A partly active group's active targets, gathered: their offsets in
+    /// the group, positions (and softening), accumulators, and each
+    /// group offset's place among them (`usize::MAX`: inactive).
+    active: Vec<usize>,
+    place: Vec<usize>,
+    pos: [Vec<f64>; 4],
+    acc: [Vec<f64>; 4],
 }
 
 impl Evaluator {
@@ -416,7 +424,8 @@ impl Evaluator {
                 if !range.clone().any(|i| targets.is_active(i)) {
                     return GravityStats::default();
                 }
-                let st = ctx.group(range, lists, ax, ay, az, phi);
+                let active = targets.active.map(|a| &a[range.clone()]);
+                let st = ctx.group(range, active, lists, ax, ay, az, phi);
                 for v in [ax, ay, az, phi] {
                     for a in v.iter_mut() {
                         *a *= g;
@@ -444,10 +453,16 @@ struct Ctx<'a> {
 impl Ctx<'_> {
     /// One target group: traversal into interaction lists, then the
     /// kernels (M2P list first, then P2P, each in traversal order), into
-    /// the group's output chunks (without the factor G).
+    /// the group's output chunks (without the factor G). Where only some of
+    /// the group is `active`, the lists are still the whole group's (a
+    /// particle's field does not depend on which mates are active) but the
+    /// kernels run on the active targets only, gathered; the others'
+    /// entries are left as they were.
+    #[allow(clippy::too_many_arguments)]
     fn group(
         &self,
         range: Range<usize>,
+        active: Option<&[bool]>,
         lists: &mut Lists,
         ax: &mut [f64],
         ay: &mut [f64],
@@ -473,7 +488,14 @@ impl Ctx<'_> {
 
         lists.m2p.clear();
         lists.p2p.clear();
-        let Lists { m2p, p2p } = lists;
+        let Lists {
+            m2p,
+            p2p,
+            active: picked,
+            place,
+            pos,
+            acc: gathered,
+        } = lists;
         let tree = self.tree;
         let crit = self.crit;
         tree.traverse(
@@ -495,10 +517,78 @@ impl Ctx<'_> {
             |leaf| p2p.push(leaf),
         );
 
+        let partial = active.filter(|a| a.iter().any(|&on| !on));
+        if let Some(a) = partial {
+            picked.clear();
+            picked.extend((0..nt).filter(|&i| a[i]));
+            place.clear();
+            place.resize(nt, usize::MAX);
+            for (k, &i) in picked.iter().enumerate() {
+                place[i] = k;
+            }
+            let th = self.h.map(|h| &h[range.clone()]);
+            for (c, v) in pos.iter_mut().enumerate() {
+                v.clear();
+                let src = [tx, ty, tz, th.unwrap_or(tx)][c];
+                v.extend(picked.iter().map(|&i| src[i]));
+            }
+            for v in gathered.iter_mut() {
+                v.clear();
+                v.resize(picked.len(), 0.0);
+            }
+            let [gx, gy, gz, gp] = gathered;
+            let [px, py, pz, ph] = &*pos;
+            let stats = self.kernels(
+                (px, py, pz, ph),
+                range.start,
+                Some(place),
+                m2p,
+                p2p,
+                Acc {
+                    ax: gx,
+                    ay: gy,
+                    az: gz,
+                    phi: gp,
+                },
+            );
+            for (k, &i) in picked.iter().enumerate() {
+                ax[i] = gx[k];
+                ay[i] = gy[k];
+                az[i] = gz[k];
+                phi[i] = gp[k];
+            }
+            return stats;
+        }
         for v in [&mut *ax, &mut *ay, &mut *az, &mut *phi] {
             v.fill(0.0);
         }
-        let acc = Acc { ax, ay, az, phi };
+        let th = self.h.map_or(&[][..], |h| &h[range.clone()]);
+        self.kernels(
+            (tx, ty, tz, th),
+            range.start,
+            None,
+            m2p,
+            p2p,
+            Acc { ax, ay, az, phi },
+        )
+    }
+
+    /// The M2P list, then the P2P list, onto targets `t` (positions and
+    /// softening) of the group starting at `t0`, into `acc`; `place` maps
+    /// a group offset to its target (the identity when `None`) for the
+    /// self pair.
+    fn kernels(
+        &self,
+        (tx, ty, tz, th): (&[f64], &[f64], &[f64], &[f64]),
+        t0: usize,
+        place: Option<&[usize]>,
+        m2p: &[NodeId],
+        p2p: &[NodeId],
+        acc: Acc<'_>,
+    ) -> GravityStats {
+        let tree = self.tree;
+        let nt = tx.len();
+        let range = t0..t0 + place.map_or(nt, <[usize]>::len);
         let mut stats = GravityStats {
             particles: nt as u64,
             groups: 1,
@@ -516,10 +606,11 @@ impl Ctx<'_> {
         }
         for &leaf in p2p.iter() {
             let sr = tree.particles(leaf);
-            let overlap = sr
-                .end
-                .min(range.end)
-                .saturating_sub(sr.start.max(range.start));
+            let (lo, hi) = (sr.start.max(range.start), sr.end.min(range.end));
+            let overlap = match place {
+                None => hi.saturating_sub(lo),
+                Some(p) => (lo..hi).filter(|&i| p[i - t0] != usize::MAX).count(),
+            };
             stats.p2p += (nt * sr.len() - overlap) as u64;
             let src = Src {
                 x: &self.x[sr.clone()],
@@ -529,8 +620,8 @@ impl Ctx<'_> {
             };
             match self.h {
                 Some(h) => p2p_group::<true>(
-                    (tx, ty, tz, &h[range.clone()]),
-                    range.start,
+                    (tx, ty, tz, th),
+                    (range.start, place),
                     &src,
                     &h[sr.clone()],
                     sr.start,
@@ -538,7 +629,7 @@ impl Ctx<'_> {
                 ),
                 None => p2p_group::<false>(
                     (tx, ty, tz, &[]),
-                    range.start,
+                    (range.start, place),
                     &src,
                     &[],
                     sr.start,
@@ -596,12 +687,14 @@ fn m2p_group<const QUAD: bool>(
 }
 
 /// P2P of one leaf's particles onto every particle of a group (global
-/// index offsets `t0`, `s0` identify the self pair). Sources outer, targets
-/// inner, so the inner loop updates independent accumulators.
+/// index offsets `t0`, `s0` identify the self pair; `place` maps a group
+/// offset to its target when the targets are a gathered subset). Sources
+/// outer, targets inner, so the inner loop updates independent
+/// accumulators.
 #[inline(always)]
 fn p2p_group<const SOFT: bool>(
     (tx, ty, tz, th): (&[f64], &[f64], &[f64], &[f64]),
-    t0: usize,
+    (t0, place): (usize, Option<&[usize]>),
     src: &Src<'_>,
     sh: &[f64],
     s0: usize,
@@ -619,8 +712,10 @@ fn p2p_group<const SOFT: bool>(
     for j in 0..src.x.len() {
         let (xj, yj, zj, mj) = (src.x[j], src.y[j], src.z[j], src.m[j]);
         let hj = if SOFT { sh[j] } else { 0.0 };
-        // Target index of the self pair (>= n when the source is outside the group).
-        let self_i = (s0 + j).wrapping_sub(t0);
+        // Target index of the self pair (>= n when the source is outside the
+        // group or an inactive mate).
+        let offset = (s0 + j).wrapping_sub(t0);
+        let self_i = place.map_or(offset, |p| p.get(offset).copied().unwrap_or(usize::MAX));
         for i in 0..n {
             let d = [xj - tx[i], yj - ty[i], zj - tz[i]];
             let eps = if SOFT { th[i] + hj } else { 0.0 };
