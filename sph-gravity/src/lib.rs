@@ -70,7 +70,8 @@
 //!   softening length (irrelevant without softening).
 //! * **Targets** are groups of [`GravityParams::group_size`] consecutive
 //!   particles of the sorted order; one traversal builds the interaction
-//!   lists of a whole group.
+//!   lists of a whole group. With some particles active ([`Targets`]), a
+//!   group is up to that many consecutive active ones.
 //! * **Softening** (as in SPH-EXA): `r_eff^2 = max(r^2, (h_i + h_j)^2)` for
 //!   particle pairs, so `a = G m (x_j - x_i) / r_eff^3`, and the matching
 //!   potential, `-G m / r` outside `h_i + h_j` and that of a uniform sphere
@@ -111,10 +112,12 @@ pub use traversal::TreeGravity;
 /// holding the cell and the node's tight box (its own particles' drift,
 /// not the largest anywhere), and a distributed evaluation demands
 /// `drift` more distance from the receiver's domain. Only the targets'
-/// entries are written: a group with no active target is skipped, and in
-/// one with some the kernels run on its active particles over the whole
-/// group's interaction lists (so a target's field does not depend on
-/// which of its mates are active); every other entry is left as it was.
+/// entries are written, every other entry is left as it was: the targets
+/// form groups of up to `group_size` consecutive active particles within
+/// spans of 8 groups along the curve, and each group's lists are made for
+/// the box of its targets, so the kernels' loops over targets stay full.
+/// With every particle active these are the groups of a full evaluation,
+/// bit for bit.
 ///
 /// ```
 /// use sph_gravity::Targets;

@@ -8,6 +8,12 @@ use rayon::prelude::*;
 use sph_tree::{apply_permutation, compute_keys, BoundingBox, Curve, KeySorter, NodeId, Octree};
 use std::ops::Range;
 
+/// Target groups of a partly active evaluation gather up to `group_size`
+/// consecutive active particles from a span of this many groups along the
+/// curve: close enough in space for tight lists, full enough that the
+/// kernels' inner loops over targets stay vector-wide.
+const ACTIVE_SPAN: usize = 8;
+
 /// What the opening test needs per node, packed together.
 #[derive(Debug, Clone, Copy, Default)]
 struct NodeCrit {
@@ -135,12 +141,12 @@ impl TreeGravity {
     }
 
     /// [`compute`](Self::compute) for the `targets` only, on a tree whose
-    /// cells may be older than the positions (see [`Targets`]): each
-    /// target group with an active particle makes the interaction lists of
-    /// the whole group (so a particle's field does not depend on which
-    /// group mates are active) and evaluates them on its active particles;
-    /// only those entries of `out` are written, the others are left as
-    /// they were (`out` keeps its contents when its length is `x.len()`).
+    /// cells may be older than the positions (see [`Targets`]): the active
+    /// particles form target groups of up to `group_size` consecutive ones
+    /// (within spans of a few groups along the curve), each with the
+    /// interaction lists of its own targets' box; only the targets'
+    /// entries of `out` are written, the others are left as they were
+    /// (`out` keeps its contents when its length is `x.len()`).
     #[allow(clippy::too_many_arguments)]
     pub fn compute_targets(
         &mut self,
@@ -409,29 +415,53 @@ impl Evaluator {
         };
         let gs = params.group_size;
         let g = params.g;
+        // Blocks of ACTIVE_SPAN groups along the curve, in parallel; in
+        // each, the active targets form groups of up to `gs` consecutive
+        // ones (the fixed groups of `gs` particles when all are active).
+        let span = gs.saturating_mul(ACTIVE_SPAN);
         let GravityField { ax, ay, az, phi } = out;
         (
-            ax.par_chunks_mut(gs),
-            ay.par_chunks_mut(gs),
-            az.par_chunks_mut(gs),
-            phi.par_chunks_mut(gs),
+            ax.par_chunks_mut(span),
+            ay.par_chunks_mut(span),
+            az.par_chunks_mut(span),
+            phi.par_chunks_mut(span),
         )
             .into_par_iter()
             .enumerate()
-            .map_init(Lists::default, |lists, (gi, (ax, ay, az, phi))| {
-                let start = gi * gs;
-                let range = start..start + ax.len();
-                if !range.clone().any(|i| targets.is_active(i)) {
-                    return GravityStats::default();
-                }
-                let active = targets.active.map(|a| &a[range.clone()]);
-                let st = ctx.group(range, active, lists, ax, ay, az, phi);
-                for v in [ax, ay, az, phi] {
-                    for a in v.iter_mut() {
-                        *a *= g;
+            .map_init(Lists::default, |lists, (bi, (ax, ay, az, phi))| {
+                let b0 = bi * span;
+                let mut stats = GravityStats::default();
+                let mut next = 0;
+                while let Some(first) = (next..ax.len()).find(|&i| targets.is_active(b0 + i)) {
+                    let mut end = first;
+                    let mut count = 0;
+                    while end < ax.len() && count < gs {
+                        count += usize::from(targets.is_active(b0 + end));
+                        end += 1;
                     }
+                    let local = first..end;
+                    let active = targets.active.map(|a| &a[b0 + first..b0 + end]);
+                    stats = stats
+                        + ctx.group(
+                            b0 + first..b0 + end,
+                            active,
+                            lists,
+                            &mut ax[local.clone()],
+                            &mut ay[local.clone()],
+                            &mut az[local.clone()],
+                            &mut phi[local.clone()],
+                        );
+                    if g != 1.0 {
+                        for i in local.filter(|&i| targets.is_active(b0 + i)) {
+                            ax[i] *= g;
+                            ay[i] *= g;
+                            az[i] *= g;
+                            phi[i] *= g;
+                        }
+                    }
+                    next = end;
                 }
-                st
+                stats
             })
             .reduce(GravityStats::default, |a, b| a + b)
     }
@@ -454,10 +484,8 @@ impl Ctx<'_> {
     /// One target group: traversal into interaction lists, then the
     /// kernels (M2P list first, then P2P, each in traversal order), into
     /// the group's output chunks (without the factor G). Where only some of
-    /// the group is `active`, the lists are still the whole group's (a
-    /// particle's field does not depend on which mates are active) but the
-    /// kernels run on the active targets only, gathered; the others'
-    /// entries are left as they were.
+    /// `range` is `active`, the targets are those, gathered: the lists are
+    /// made for their box and the others' entries are left as they were.
     #[allow(clippy::too_many_arguments)]
     fn group(
         &self,
@@ -475,16 +503,22 @@ impl Ctx<'_> {
             &self.z[range.clone()],
         );
         let nt = tx.len();
+        let partial = active.filter(|a| a.iter().any(|&on| !on));
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
-        for i in 0..nt {
+        for i in (0..nt).filter(|&i| partial.is_none_or(|a| a[i])) {
             let p = [tx[i], ty[i], tz[i]];
             for d in 0..3 {
                 lo[d] = lo[d].min(p[d]);
                 hi[d] = hi[d].max(p[d]);
             }
         }
-        let gh = self.h.map_or(0.0, |h| max_of(&h[range.clone()]));
+        let gh = self.h.map_or(0.0, |h| {
+            let h = &h[range.clone()];
+            (0..nt)
+                .filter(|&i| partial.is_none_or(|a| a[i]))
+                .fold(0.0, |m: f64, i| m.max(h[i]))
+        });
 
         lists.m2p.clear();
         lists.p2p.clear();
@@ -517,7 +551,6 @@ impl Ctx<'_> {
             |leaf| p2p.push(leaf),
         );
 
-        let partial = active.filter(|a| a.iter().any(|&on| !on));
         if let Some(a) = partial {
             picked.clear();
             picked.extend((0..nt).filter(|&i| a[i]));

@@ -154,8 +154,8 @@ fn plummer_on_1_2_4_ranks_matches_direct_sum() {
 /// particles drifted since by up to 0.01 (a hundredth of the Plummer
 /// radius), the field wanted on a random third of them. The drift margin
 /// keeps the tree's accuracy against the direct sum at the drifted
-/// positions on 1, 2 and 4 ranks, and the active particles' fields do
-/// not depend on which others are active.
+/// positions on 1, 2 and 4 ranks, and the active particles' fields stay
+/// within it of an all-active evaluation.
 #[test]
 fn drifted_active_targets_keep_the_tree_accuracy() {
     let keyed = plummer(10_000, 10.0, 11);
@@ -194,12 +194,13 @@ fn drifted_active_targets_keep_the_tree_accuracy() {
         println!("{ranks} ranks, drifted: p99 {p99:.2e} max {max:.2e}");
         assert!(p99 <= 1e-3, "{ranks} ranks: p99 {p99:e}");
         assert!(max <= 3e-2, "{ranks} ranks: max {max:e}");
-        if ranks == 1 {
-            // One rank: the active particles' groups are evaluated whole,
-            // so their fields are those of an all-active evaluation.
-            let full = pick(&all_active);
-            assert_eq!(pick(&f).ax, full.ax);
-            assert_eq!(pick(&f).phi, full.phi);
-        }
+        // Against the all-active evaluation (groups of other members, the
+        // same drift margin): within the tree's own error.
+        let d = relative_errors(&pick(&f), &pick(&all_active));
+        assert!(
+            quantile(&d, 0.99) <= 1e-3,
+            "{ranks} ranks vs all active: {:e}",
+            quantile(&d, 0.99)
+        );
     }
 }
