@@ -213,6 +213,18 @@ impl DtLimit {
 }
 
 impl TimestepParams {
+    /// The limiter's factor, `2^limiter_delta`: how many times longer
+    /// than its neighbours' a particle's step may be (and how far below
+    /// its own criteria the start ramp may hold it).
+    ///
+    /// ```
+    /// let ts = sph_core::TimestepParams::default();
+    /// assert_eq!(ts.limiter_factor(), 4);
+    /// ```
+    pub fn limiter_factor(&self) -> u32 {
+        1u32 << self.limiter_delta.min(31)
+    }
+
     /// `dt = min(Kcour min h/v_sig, Krho / max|div v|, eta sqrt(eps/max|a|),
     /// k_u / max(-du/dt / u), growth * dt_prev)`, from stats already
     /// reduced over all particles (and ranks); `max_acc` is zero when the

@@ -672,7 +672,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         // The start ramp, never more than the limiter's factor below a
         // particle's own criteria.
         let ramp = (ts.max_growth - 1.0) * (self.t - b.ramp_origin);
-        let depth = f64::from(1u32 << ts.limiter_delta.min(31));
+        let depth = f64::from(ts.limiter_factor());
         b.dt_criteria.clear();
         b.dt_criteria.resize(owned.len(), f64::INFINITY);
         b.dt_criteria

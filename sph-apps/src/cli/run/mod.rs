@@ -149,11 +149,10 @@ fn user_scene(
 /// stops after `--steps` alone (block steps need an end time for their
 /// time line).
 fn default_time_steps(a: &RunArgs, case: &dyn cases::Case, user_scene: bool) -> TimeSteps {
-    let stirs = a
-        .stir
-        .as_ref()
-        .map_or(case.physics().stirring.is_some(), |s| s.0.is_some());
-    if stirs || (user_scene && a.end_time.is_none()) {
+    // A stirring case's own default is already global; `--stir` may turn
+    // driving on for a case that does not stir.
+    let stir_on = a.stir.as_ref().is_some_and(|s| s.0.is_some());
+    if stir_on || (user_scene && a.end_time.is_none()) {
         TimeSteps::Global
     } else {
         case.default_time_steps()

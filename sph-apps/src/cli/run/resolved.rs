@@ -109,7 +109,7 @@ pub(crate) fn resolved_config(
         );
         set(
             "limiter-factor",
-            Value::Integer(1i64 << config.timestep.limiter_delta),
+            Value::Integer(config.timestep.limiter_factor().into()),
         );
     }
     for o in SCHEME_OPTIONS {
