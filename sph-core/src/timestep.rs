@@ -29,8 +29,9 @@ pub struct TimestepParams {
     /// How the first step relates to the given first time step `dt0`.
     pub first_step: FirstStep,
     /// Block time steps: the longest step a particle may take, or `None`
-    /// for an eighth of the run's span (the cold gas of a blast costs
-    /// `span / dt_max` updates per particle).
+    /// for a quarter of the run's span (the cold gas of a blast costs
+    /// `span / dt_max` updates per particle; the limiter wakes it before
+    /// the front arrives).
     pub dt_max: Option<f64>,
     /// Block time steps: the limiter (Saitoh & Makino 2009). No
     /// particle's bin is more than `limiter_delta` above its

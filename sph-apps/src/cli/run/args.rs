@@ -135,7 +135,7 @@ pub(crate) struct RunArgs {
     #[arg(long, value_parser = choice::<TimeSteps>())]
     pub(crate) time_steps: Option<TimeSteps>,
     /// Block time steps: the longest step a particle may take (default:
-    /// an eighth of the run's span to its end time).
+    /// a quarter of the run's span to its end time).
     #[arg(long, value_name = "DT", value_parser = parse_positive)]
     pub(crate) dt_max: Option<f64>,
     /// Block time steps: the limiter (Saitoh & Makino 2009; default on).
