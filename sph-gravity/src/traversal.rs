@@ -504,24 +504,6 @@ impl Ctx<'_> {
         );
         let nt = tx.len();
         let partial = active.filter(|a| a.iter().any(|&on| !on));
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for i in (0..nt).filter(|&i| partial.is_none_or(|a| a[i])) {
-            let p = [tx[i], ty[i], tz[i]];
-            for d in 0..3 {
-                lo[d] = lo[d].min(p[d]);
-                hi[d] = hi[d].max(p[d]);
-            }
-        }
-        let gh = self.h.map_or(0.0, |h| {
-            let h = &h[range.clone()];
-            (0..nt)
-                .filter(|&i| partial.is_none_or(|a| a[i]))
-                .fold(0.0, |m: f64, i| m.max(h[i]))
-        });
-
-        lists.m2p.clear();
-        lists.p2p.clear();
         let Lists {
             m2p,
             p2p,
@@ -530,6 +512,28 @@ impl Ctx<'_> {
             pos,
             acc: gathered,
         } = lists;
+        m2p.clear();
+        p2p.clear();
+        // The targets (group offsets): the active ones, or all.
+        picked.clear();
+        match partial {
+            Some(a) => picked.extend((0..nt).filter(|&i| a[i])),
+            None => picked.extend(0..nt),
+        }
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for &i in picked.iter() {
+            let p = [tx[i], ty[i], tz[i]];
+            for d in 0..3 {
+                lo[d] = lo[d].min(p[d]);
+                hi[d] = hi[d].max(p[d]);
+            }
+        }
+        let gh = self.h.map_or(0.0, |h| {
+            let h = &h[range.clone()];
+            picked.iter().map(|&i| h[i]).fold(0.0, f64::max)
+        });
+
         let tree = self.tree;
         let crit = self.crit;
         tree.traverse(
@@ -551,9 +555,7 @@ impl Ctx<'_> {
             |leaf| p2p.push(leaf),
         );
 
-        if let Some(a) = partial {
-            picked.clear();
-            picked.extend((0..nt).filter(|&i| a[i]));
+        if partial.is_some() {
             place.clear();
             place.resize(nt, usize::MAX);
             for (k, &i) in picked.iter().enumerate() {
