@@ -440,7 +440,11 @@ impl Evaluator {
                         end += 1;
                     }
                     let local = first..end;
-                    let active = targets.active.map(|a| &a[b0 + first..b0 + end]);
+                    // Flags only where some of the run are inactive.
+                    let active = targets
+                        .active
+                        .filter(|_| count < end - first)
+                        .map(|a| &a[b0 + first..b0 + end]);
                     stats = stats
                         + ctx.group(
                             b0 + first..b0 + end,
@@ -483,9 +487,10 @@ struct Ctx<'a> {
 impl Ctx<'_> {
     /// One target group: traversal into interaction lists, then the
     /// kernels (M2P list first, then P2P, each in traversal order), into
-    /// the group's output chunks (without the factor G). Where only some of
-    /// `range` is `active`, the targets are those, gathered: the lists are
-    /// made for their box and the others' entries are left as they were.
+    /// the group's output chunks (without the factor G). `active` flags
+    /// `range` only where some of it is inactive: the targets are then the
+    /// flagged ones, gathered, the lists are made for their box and the
+    /// others' entries are left as they were.
     #[allow(clippy::too_many_arguments)]
     fn group(
         &self,
@@ -503,7 +508,6 @@ impl Ctx<'_> {
             &self.z[range.clone()],
         );
         let nt = tx.len();
-        let partial = active.filter(|a| a.iter().any(|&on| !on));
         let Lists {
             m2p,
             p2p,
@@ -514,25 +518,29 @@ impl Ctx<'_> {
         } = lists;
         m2p.clear();
         p2p.clear();
-        // The targets (group offsets): the active ones, or all.
-        picked.clear();
-        match partial {
-            Some(a) => picked.extend((0..nt).filter(|&i| a[i])),
-            None => picked.extend(0..nt),
+        // Where some are inactive, the targets (group offsets) are the
+        // active ones, gathered once.
+        if let Some(a) = active {
+            picked.clear();
+            picked.extend((0..nt).filter(|&i| a[i]));
         }
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
-        for &i in picked.iter() {
+        let mut gh: f64 = 0.0;
+        let mut extend = |i: usize| {
             let p = [tx[i], ty[i], tz[i]];
             for d in 0..3 {
                 lo[d] = lo[d].min(p[d]);
                 hi[d] = hi[d].max(p[d]);
             }
+            if let Some(h) = self.h {
+                gh = gh.max(h[range.start + i]);
+            }
+        };
+        match active {
+            Some(_) => picked.iter().for_each(|&i| extend(i)),
+            None => (0..nt).for_each(extend),
         }
-        let gh = self.h.map_or(0.0, |h| {
-            let h = &h[range.clone()];
-            picked.iter().map(|&i| h[i]).fold(0.0, f64::max)
-        });
 
         let tree = self.tree;
         let crit = self.crit;
@@ -555,7 +563,7 @@ impl Ctx<'_> {
             |leaf| p2p.push(leaf),
         );
 
-        if partial.is_some() {
+        if active.is_some() {
             place.clear();
             place.resize(nt, usize::MAX);
             for (k, &i) in picked.iter().enumerate() {

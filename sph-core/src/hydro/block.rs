@@ -43,16 +43,16 @@ use crate::{CoreError, Particles};
 use rayon::prelude::*;
 use sph_comm::{Communicator, ReduceOp};
 use sph_gravity::Targets;
+use sph_kernels::Kernel;
+use sph_tree::{BoundingBox, CompactNeighborList, NeighborStats};
+use std::ops::Range;
+use std::sync::atomic::{AtomicU8, Ordering};
 
 /// The default longest step is the run's span over this. The cold gas
 /// ahead of a blast takes that step (`DT_MAX_PER_SPAN` updates per
 /// particle) until the limiter wakes it; Sedov 40^3 to t = 0.05: 1.861 M
 /// updates at span / 8, 1.714 M at span / 4, the same L1 and energy.
 const DT_MAX_PER_SPAN: f64 = 4.0;
-use sph_kernels::Kernel;
-use sph_tree::{BoundingBox, CompactNeighborList, NeighborStats};
-use std::ops::Range;
-use std::sync::atomic::{AtomicU8, Ordering};
 
 /// The block-step state of a pipeline besides the particles' bins.
 #[derive(Debug, Default)]
