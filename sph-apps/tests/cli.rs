@@ -676,15 +676,15 @@ fn a_block_step_snapshot_lands_at_the_requested_time() {
     );
 }
 
-/// Block time steps are each case's default, named in `config.toml`;
-/// a run that stirs steps globally (block steps do not cover driving
-/// yet), as one that asks for it does; under block steps `--steps N`
-/// stops at the case's end time at the latest.
+/// Block time steps are each case's default, named in `config.toml`,
+/// with driving turned on too; driven turbulence steps globally unless
+/// asked for block steps, as a run that asks for global steps does; under
+/// block steps `--steps N` stops at the case's end time at the latest.
 #[test]
-fn cases_run_block_time_steps_unless_they_stir() {
-    let run = |name: &str, extra: &[&str]| -> (String, serde_json::Value) {
+fn cases_run_block_time_steps_but_driven_turbulence() {
+    let run_case = |case: &str, name: &str, extra: &[&str]| -> (String, serde_json::Value) {
         let dir = scratch(name);
-        let mut args = vec!["sedov", "-n", "8", "-q", "--out", s(&dir)];
+        let mut args = vec![case, "-n", "8", "-q", "--out", s(&dir)];
         args.extend_from_slice(extra);
         common::ok(&args);
         let config = std::fs::read_to_string(dir.join("config.toml")).unwrap();
@@ -696,10 +696,20 @@ fn cases_run_block_time_steps_unless_they_stir() {
         let summary = std::fs::read_to_string(dir.join("summary.json")).unwrap();
         (line, serde_json::from_str(&summary).unwrap())
     };
+    let run = |name: &str, extra: &[&str]| run_case("sedov", name, extra);
     let (block, _) = run("default-block", &["--steps", "2"]);
     assert_eq!(block, r#"time-steps = "block""#);
     let (stirred, _) = run("default-stirred", &["--steps", "2", "--stir", "on"]);
-    assert_eq!(stirred, r#"time-steps = "global""#);
+    assert_eq!(stirred, r#"time-steps = "block""#);
+    let turbulence = |name: &str, extra: &[&str]| run_case("turbulence", name, extra);
+    let (driven, _) = turbulence("turbulence-default", &["--steps", "2"]);
+    assert_eq!(driven, r#"time-steps = "global""#);
+    let (driven, s) = turbulence(
+        "turbulence-block",
+        &["--steps", "4", "--time-steps", "block"],
+    );
+    assert_eq!(driven, r#"time-steps = "block""#);
+    assert_eq!(s["steps"].as_u64(), Some(4), "{s}");
     let (asked, _) = run("asked-global", &["--steps", "2", "--time-steps", "global"]);
     assert_eq!(asked, r#"time-steps = "global""#);
     // The case's end time, 0.05, comes first.

@@ -86,6 +86,10 @@ pub enum Needs {
     /// Block time steps with viscosity cleaning: the velocity gradients
     /// inactive neighbours hold.
     BlockCleaning,
+    /// Block time steps with turbulence driving: the stirring
+    /// acceleration each particle keeps over its step (its work accrues
+    /// as the particle drifts).
+    BlockStirring,
 }
 
 /// Which optional fields a run holds (one flag per [`Needs`] condition
@@ -115,6 +119,9 @@ pub struct FieldSet {
     /// Viscosity cleaning: its velocity gradients are held under block
     /// time steps.
     pub cleaning: bool,
+    /// Turbulence driving: each particle's stirring acceleration is kept
+    /// over its step under block time steps.
+    pub stirring: bool,
 }
 
 impl FieldSet {
@@ -129,6 +136,7 @@ impl FieldSet {
         volumes: false,
         balsara: false,
         cleaning: false,
+        stirring: false,
     };
 }
 
@@ -145,6 +153,7 @@ impl Default for FieldSet {
             volumes: false,
             balsara: false,
             cleaning: false,
+            stirring: false,
         }
     }
 }
@@ -164,6 +173,7 @@ impl FieldSet {
             Needs::BlockVolumes => self.block && self.volumes,
             Needs::BlockBalsara => self.block && self.balsara,
             Needs::BlockCleaning => self.block && self.cleaning,
+            Needs::BlockStirring => self.block && self.stirring,
         }
     }
 
@@ -179,6 +189,7 @@ impl FieldSet {
             volumes: self.volumes || other.volumes,
             balsara: self.balsara || other.balsara,
             cleaning: self.cleaning || other.cleaning,
+            stirring: self.stirring || other.stirring,
         }
     }
 }
@@ -305,8 +316,8 @@ const fn kept_by_blocks(mut f: Field) -> Field {
 
 use Kind::{History, Identity, Persistent};
 use Needs::{
-    Always, BlockBalsara, BlockCleaning, BlockSteps, BlockSwitches, BlockVolumes, GradH, Gravity,
-    Iad, ReferencedEos, Switches,
+    Always, BlockBalsara, BlockCleaning, BlockSteps, BlockStirring, BlockSwitches, BlockVolumes,
+    GradH, Gravity, Iad, ReferencedEos, Switches,
 };
 
 const DERIVED: Kind = Kind::Derived { fill: 0.0 };
@@ -399,6 +410,10 @@ pub struct Particles {
     /// G_zz` of viscosity cleaning, held for inactive neighbours (block
     /// time steps with cleaning; global runs keep it in the step buffers).
     pub grad_v: [Vec<f64>; 6],
+    /// The stirring acceleration the particle got at the start of its
+    /// step, kept over the step (block time steps with turbulence
+    /// driving; global runs keep it in the step buffers).
+    pub stir_a: [Vec<f64>; 3],
     /// The optional fields held (on every rank alike, even one that holds
     /// no particles right now, so that messages agree).
     pub(crate) fields: FieldSet,
@@ -432,6 +447,9 @@ pub const FIELDS: &[Field] = &[
     doc(field!("p0", None, Persistent, ReferencedEos, F64, eos_ref[1]), "reference pressure of the referenced EOS"),
     doc(field!("bin", None, Persistent, BlockSteps, F64, bin), "time bin of the particle's step (block time steps)"),
     doc(field!("dlnrho", None, Persistent, BlockSteps, F64, dlnrho), "d ln rho / dt over the particle's last step (block time steps)"),
+    doc(field!("stir_ax", None, History, BlockStirring, F64, stir_a[0]), "stirring acceleration over the particle's step, x (block time steps, driving)"),
+    doc(field!("stir_ay", None, History, BlockStirring, F64, stir_a[1]), "stirring acceleration over the particle's step, y (block time steps, driving)"),
+    doc(field!("stir_az", None, History, BlockStirring, F64, stir_a[2]), "stirring acceleration over the particle's step, z (block time steps, driving)"),
     kept_by_blocks(doc(field!("div_v", None, DERIVED, BlockSwitches, F64, div_v), "velocity divergence (block time steps with switches)")),
     kept_by_blocks(doc(field!("xm", None, DERIVED, BlockVolumes, F64, xm), "volume element X (block time steps, generalised volumes)")),
     kept_by_blocks(doc(field!("kx", None, DERIVED, BlockVolumes, F64, kx), "volume normalisation k (block time steps, generalised volumes)")),
@@ -524,6 +542,7 @@ mod tests {
                 volumes: true,
                 balsara: true,
                 cleaning: true,
+                stirring: true,
             },
         );
         for (k, f) in FIELDS.iter().enumerate() {
@@ -578,6 +597,21 @@ mod tests {
         .map(|f| f.name)
         .collect();
         assert_eq!(block, ["bin", "dlnrho"]);
+        // The stirring acceleration is kept only under block steps.
+        for (block, kept) in [
+            (false, &[][..]),
+            (true, &["stir_ax", "stir_ay", "stir_az"][..]),
+        ] {
+            let stirred: Vec<_> = held(FieldSet {
+                block,
+                stirring: true,
+                ..none
+            })
+            .filter(|f| !matches!(f.needs, Needs::Always | Needs::BlockSteps))
+            .map(|f| f.name)
+            .collect();
+            assert_eq!(stirred, kept);
+        }
         // A halo carries 4 words fewer than a migrating particle.
         let block = FieldSet {
             block: true,

@@ -112,8 +112,9 @@ impl Particles {
     /// The fields that carry state from one step to the next (everything
     /// else is recomputed each step), in packing order: what migration
     /// moves, and without the integrator's history (`dx`, `dy`, `dz`,
-    /// `du_prev`: set and read for owned particles only) what a halo
-    /// carries ([`HISTORY_FIELDS`] words fewer).
+    /// `du_prev` and, stirred under block steps, the kept stirring
+    /// acceleration: set and read for owned particles only) what a halo
+    /// carries.
     fn carried(&self, history: bool) -> impl Iterator<Item = &Vec<f64>> + '_ {
         fields::sent(self.fields, history).filter_map(|f| f.f64(self))
     }
@@ -241,9 +242,6 @@ fn arrival(kind: Kind) -> f64 {
     }
 }
 
-/// Fields of the integrator's history (see [`Kind::History`]).
-const HISTORY_FIELDS: usize = 4;
-
 /// One field of [`ParticleFields::place_halos`]: the halos (from
 /// `n_owned` on) gathered in `order` into `scratch`, the owned block
 /// shifted by `n_low`, the halos written around it.
@@ -301,7 +299,7 @@ impl ParticleFields for Particles {
     }
 
     fn halo_words(&self) -> usize {
-        self.packed_words() - HISTORY_FIELDS
+        1 + fields::sent(self.fields, false).count()
     }
 
     fn pack_halo(&self, i: usize, out: &mut Vec<u64>) {

@@ -413,6 +413,7 @@ impl Scheme {
             volumes: self.volume != Volume::Mass,
             balsara: self.balsara,
             cleaning: self.av_cleaning,
+            stirring: false,
         }
     }
 }

@@ -88,8 +88,7 @@ impl crate::Choice for TimeSteps {
             }
             TimeSteps::Block => {
                 "Each particle its own power-of-two fraction of a longest step, with a limiter \
-                 (block time steps; every scheme and equation of state, not turbulence \
-                 driving yet)"
+                 (block time steps; every scheme, equation of state and driving)"
             }
             TimeSteps::Kdk => {
                 "The block-step integrator with every particle in the smallest bin any needs \

@@ -87,15 +87,11 @@ fn energies(dir: &Path) -> [(f64, f64, [f64; 3]); 2] {
     [row(rows[0]), row(rows[rows.len() - 1])]
 }
 
-/// The driven run rises, saturates near the target, and conserves E - W
-/// and momentum; the undriven one does not rise.
-#[test]
-fn driven_turbulence_rises_and_saturates() {
-    let out = sph_validation::scratch("turbulence-16");
-    let scene = sph_validation::scene("turbulence", 16);
-    let mass = scene.particles.m.iter().sum::<f64>();
-    sph_validation::run(scene, Stop::Time(6.0 * T), &out);
-    let curve = mach_curve(&out);
+/// The statistics and conservation checks of a driven run in `out` of
+/// gas of mass `mass`, at 16^3 (`label` names the run): rise, saturation,
+/// level, `E - W`, and the net momentum within `momentum` of `M v`.
+fn driven_checks(out: &Path, mass: f64, momentum: f64, label: &str) {
+    let curve = mach_curve(out);
     let target = turbulence::MACH_TARGET;
 
     let rise = mach_at(&curve, T);
@@ -104,26 +100,42 @@ fn driven_turbulence_rises_and_saturates() {
         mean_mach(&curve, 4.5 * T, 6.0 * T),
     );
     let level = mean_mach(&curve, 3.0 * T, 6.0 * T);
-    println!("16^3: M(T) {rise:.3}, means {early:.3} / {late:.3}, over [3T, 6T] {level:.3}");
+    println!("{label}: M(T) {rise:.3}, means {early:.3} / {late:.3}, over [3T, 6T] {level:.3}");
     assert!(
         rise > 0.5 * target,
-        "M(T) = {rise}: no rise to half the target"
+        "{label}: M(T) = {rise}: no rise to half the target"
     );
     assert!(
         (early / late - 1.0).abs() < 0.15,
-        "not saturated: {early} then {late}"
+        "{label}: not saturated: {early} then {late}"
     );
     assert!(
         (level / target - 1.0).abs() < 0.25,
-        "level {level} against {target}"
+        "{label}: level {level} against {target}"
     );
 
-    let [(e0, w0, _), (e, w, p)] = energies(&out);
+    let [(e0, w0, _), (e, w, p)] = energies(out);
     let closure = (e - e0 - (w - w0)).abs() / (w - w0);
-    println!("16^3: E - E0 - W = {closure:.2e} of W = {w:.4}");
-    assert!(closure < 1e-2, "E - E0 - W = {closure} of W");
+    println!("{label}: E - E0 - W = {closure:.2e} of W = {w:.4}");
+    assert!(closure < 1e-2, "{label}: E - E0 - W = {closure} of W");
     let p_rel = p.iter().fold(0.0f64, |m, c| m.max(c.abs())) / (mass * target);
-    assert!(p_rel < 1e-13, "net momentum {p:?}: {p_rel:e} of M v");
+    println!("{label}: net momentum {p_rel:.2e} of M v");
+    assert!(
+        p_rel < momentum,
+        "{label}: net momentum {p:?}: {p_rel:e} of M v"
+    );
+}
+
+/// The driven run rises, saturates near the target, and conserves E - W
+/// and momentum; the undriven one does not rise.
+#[test]
+fn driven_turbulence_rises_and_saturates() {
+    let out = sph_validation::scratch("turbulence-16");
+    let scene = sph_validation::scene("turbulence", 16);
+    let mass = scene.particles.m.iter().sum::<f64>();
+    sph_validation::run(scene, Stop::Time(6.0 * T), &out);
+    driven_checks(&out, mass, 1e-13, "16^3");
+    let target = turbulence::MACH_TARGET;
 
     // The same glass, not driven: the rise check fails.
     let off = sph_validation::scratch("turbulence-16-undriven");
@@ -137,6 +149,32 @@ fn driven_turbulence_rises_and_saturates() {
     let still = mach_at(&mach_curve(&off), T);
     println!("16^3 undriven: M(T) {still:.3}");
     assert!(still < 0.5 * target, "undriven M(T) = {still}");
+}
+
+/// The same under block time steps (issue 41): the statistics and `E - W`
+/// at the same bounds. The driving's net force is removed over the kept
+/// accelerations of all particles, but a kick over a particle's own step
+/// weights its accelerations by that step, so neither the driving nor
+/// the pair forces conserve momentum to round-off here; the bound is
+/// stated from two resolutions, with the limiter. Measured (2026-12-05):
+/// 16^3 M(T) 0.224, means 0.258 / 0.246, level 0.252, E - E0 - W 4.6e-3
+/// of W, momentum 1.0e-4 of M v (global: 0.222, 0.258 / 0.230, 0.244,
+/// 2.2e-3, 4e-17); 24^3 level 0.280 (global 0.279), E - E0 - W 8.8e-3,
+/// momentum 9.6e-5. 8% fewer particle updates than the global run in 40%
+/// more sub-steps: the case's default stays global.
+#[test]
+fn block_steps_drive_the_same_turbulence() {
+    let out = sph_validation::scratch("turbulence-16-block");
+    let mut scene = sph_validation::scene("turbulence", 16);
+    scene.config.time_steps = sph_core::TimeSteps::Block;
+    let mass = scene.particles.m.iter().sum::<f64>();
+    let n = scene.particles.m.len() as u64;
+    let s = sph_validation::run(scene, Stop::Time(6.0 * T), &out);
+    assert!(
+        s.particle_updates < s.steps * n,
+        "every sub-step updated every particle"
+    );
+    driven_checks(&out, mass, 3e-4, "16^3 block");
 }
 
 /// 32^3 to six turnover times: the mean Mach number over [3T, 6T] within

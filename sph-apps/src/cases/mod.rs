@@ -128,7 +128,10 @@ pub trait Case: Sync + std::fmt::Debug {
 
     /// How the case's particles share time steps unless `--time-steps`
     /// says otherwise: block steps, or one global step where the case
-    /// stirs (block steps do not cover turbulence driving yet).
+    /// stirs. Block steps cover driving, but a stirred box's particles all
+    /// need about the same step: driven turbulence at 16^3 does 8% fewer
+    /// updates under them in 40% more sub-steps, 1.07-1.14x the global
+    /// run's wall time.
     fn default_time_steps(&self) -> TimeSteps {
         if self.physics().stirring.is_some() {
             TimeSteps::Global

@@ -211,12 +211,15 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
 
     /// Continues the time line of a checkpoint written at a
     /// synchronisation point: the next sub-step syncs the domain, as the
-    /// run that wrote it did there.
+    /// run that wrote it did there. A checkpoint at the end of its line
+    /// (a line short of the run's end: one step for all, in a scene whose
+    /// particles need about the same step) continues with the next line,
+    /// as the run that wrote it did.
     pub(super) fn restore_block_run(&mut self, b: BlockRun) -> Result<(), CoreError> {
         let line = TimeLine::with_top_bin(b.t_begin, b.t_end, Bin(b.dt_max_bin))?;
-        if b.ti >= LINE {
+        if b.ti > LINE {
             return Err(CoreError::Invalid(format!(
-                "the checkpoint's time line is at its end (tick {} of {LINE}): nothing to continue",
+                "the checkpoint's tick {} is past its time line's end ({LINE})",
                 b.ti
             )));
         }
@@ -333,6 +336,13 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             // Adams-Bashforth needs du_{n-1}; the first step uses du_0.
             p.du_prev[owned.clone()].copy_from_slice(&p.du[owned.clone()]);
         }
+        if self.config.stirring.is_some() {
+            let active = std::mem::take(&mut self.block.active);
+            let stirred = self.stir_active(p, bbox, owned.clone(), &active);
+            self.block.active = active;
+            stirred?;
+            clock.lap(Stage::Stirring);
+        }
         if self.gravity.is_some() {
             // The active particles' groups, on the tree of the last sync
             // (refitted) with its cells widened by the drift since.
@@ -390,6 +400,17 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
 
         let reach = self.drift(p, bbox, &line, owned.clone(), ti, next, step)?;
         grow_open_axes(bbox, reach)?;
+        // The stirring's work up to now (that of the conserved sums above);
+        // then the drift's, each particle along its share of its step.
+        let external_work = self.external_work;
+        if self.config.stirring.is_some() {
+            let ticks = (next - ti) as f64;
+            let bins = &p.bin;
+            let mut work =
+                self.stir_drift_work(p, owned.clone(), |i| ticks / bin_of(bins[i]).ticks() as f64);
+            work.all_reduce(self.domain.comm());
+            self.external_work += work.value();
+        }
         clock.lap(Stage::Integrate);
 
         let (nc_min, nc_max, h_max) =
@@ -438,7 +459,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             dt,
             dt_limit: limit,
             conserved,
-            external_work: self.external_work,
+            external_work,
             neighbors: NeighborStats {
                 min_count: (-ext[0]).max(0.0) as usize,
                 max_count: ext[1] as usize,

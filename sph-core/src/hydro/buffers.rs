@@ -30,6 +30,9 @@ pub(super) struct StepBuffers {
     /// The stirring acceleration of the owned particles (stirred runs
     /// only), net impulse removed.
     pub(super) stir: [Vec<f64>; 3],
+    /// The active particles' positions the stirring is evaluated at
+    /// (block time steps only).
+    pub(super) stir_at: [Vec<f64>; 3],
 }
 
 impl StepBuffers {
@@ -44,7 +47,8 @@ impl StepBuffers {
                 + self.kx.capacity()
                 + self.h_over_vsig.capacity()
                 + self.compression.capacity()
-                + self.stir.iter().map(Vec::capacity).sum::<usize>())
+                + self.stir.iter().map(Vec::capacity).sum::<usize>()
+                + self.stir_at.iter().map(Vec::capacity).sum::<usize>())
                 * 8
     }
 }

@@ -109,23 +109,8 @@ impl HydroConfig {
         if let Some(stir) = &self.stirring {
             stir.validate()?;
         }
-        if self.time_steps.on_time_line() {
-            self.block_support()?;
-        }
         if self.bucket == 0 {
             return Err(CoreError::Invalid("bucket size must be at least 1".into()));
-        }
-        Ok(())
-    }
-
-    /// What block time steps do not cover yet, named: turbulence driving
-    /// (its forcing is applied per global step).
-    fn block_support(&self) -> Result<(), CoreError> {
-        if self.stirring.is_some() {
-            return Err(CoreError::Invalid(format!(
-                "--time-steps {} does not cover turbulence driving yet; use --time-steps global",
-                crate::Choice::name(&self.time_steps)
-            )));
         }
         Ok(())
     }
@@ -136,6 +121,7 @@ impl HydroConfig {
         FieldSet {
             eos_ref: self.eos.needs_reference(),
             block: self.time_steps.on_time_line(),
+            stirring: self.stirring.is_some(),
             ..self.scheme.fields(self.gravity.is_some())
         }
     }

@@ -100,6 +100,112 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         [s1, s2]
     }
 
+    /// [`Hydro::stir`] under block time steps: advances the driving by the
+    /// last sub-step and gives the active owned particles (`active[k]` for
+    /// the `k`-th owned one) the stirring acceleration at their positions,
+    /// kept in `p.stir_a` over their step. One constant is taken off the
+    /// new accelerations so that the kept accelerations of all particles
+    /// (the inactive ones': those of their step's start) have a zero
+    /// mass-weighted sum: the driving's net force stays zero while
+    /// particles drift (kicks over steps of different lengths still
+    /// leave a small net impulse, as block steps do for the pair forces).
+    /// Exact sums: independent of rank and thread counts.
+    pub(super) fn stir_active(
+        &mut self,
+        p: &mut Particles,
+        bbox: &BoundingBox,
+        owned: Range<usize>,
+        active: &[bool],
+    ) -> Result<(), CoreError> {
+        let Some(params) = self.config.stirring else {
+            return Ok(());
+        };
+        let stirring = match &mut self.stirring {
+            Some(s) => s,
+            slot => slot.insert(Stirring::new(params, bbox)?),
+        };
+        stirring.advance(self.dt_prev);
+        let o = owned.start;
+        let [px, py, pz] = &mut self.buf.stir_at;
+        for (at, pos) in [(&mut *px, &p.x), (&mut *py, &p.y), (&mut *pz, &p.z)] {
+            at.clear();
+            at.extend(owned.clone().filter(|i| active[i - o]).map(|i| pos[i]));
+        }
+        let n = px.len();
+        let [sx, sy, sz] = &mut self.buf.stir;
+        for s in [&mut *sx, &mut *sy, &mut *sz] {
+            s.clear();
+            s.resize(n, 0.0);
+        }
+        stirring.accelerate(px, py, pz, sx, sy, sz);
+
+        // Scatter the new accelerations into the kept ones, then the sums
+        // over all owned particles: the active ones' mass, and every
+        // particle's kept mass-weighted acceleration.
+        for (k, i) in owned.clone().filter(|i| active[i - o]).enumerate() {
+            p.stir_a[0][i] = sx[k];
+            p.stir_a[1][i] = sy[k];
+            p.stir_a[2][i] = sz[k];
+        }
+        let (m, kept) = (&p.m, &p.stir_a);
+        let mut sums = exact_sums(owned.len(), |k, s: &mut [ExactSum; 4]| {
+            let i = o + k;
+            if active[k] {
+                s[0].add(m[i]);
+            }
+            for c in 0..3 {
+                s[c + 1].add(m[i] * kept[c][i]);
+            }
+        });
+        ExactSum::all_reduce_many(&mut sums, self.domain.comm());
+        let mass = sums[0].value();
+        let shift = [1, 2, 3].map(|c| {
+            if mass > 0.0 {
+                sums[c].value() / mass
+            } else {
+                0.0
+            }
+        });
+        let a = [&mut p.ax, &mut p.ay, &mut p.az];
+        for ((kept, a), shift) in p.stir_a.iter_mut().zip(a).zip(shift) {
+            kept[owned.clone()]
+                .par_iter_mut()
+                .zip(a[owned.clone()].par_iter_mut())
+                .zip(active.par_iter())
+                .filter(|(_, &on)| on)
+                .for_each(|((s, a), _)| {
+                    *s -= shift;
+                    *a += *s;
+                });
+        }
+        Ok(())
+    }
+
+    /// This rank's exact partial sum of the stirring's work over a drift
+    /// under block time steps: `sum m a_s . dx` with `a_s` the kept
+    /// stirring acceleration and `dx` the drift's position change (the
+    /// particle's step displacement times `share[i]`, its part of the
+    /// step). Zero without stirring.
+    pub(super) fn stir_drift_work(
+        &self,
+        p: &Particles,
+        owned: Range<usize>,
+        share: impl Fn(usize) -> f64 + Sync,
+    ) -> ExactSum {
+        if self.config.stirring.is_none() {
+            return ExactSum::default();
+        }
+        let o = owned.start;
+        let [w] = exact_sums(owned.len(), |k, s: &mut [ExactSum; 1]| {
+            let i = o + k;
+            let f = share(i);
+            let d = [p.dx[i], p.dy[i], p.dz[i]];
+            let w: f64 = (0..3).map(|c| p.stir_a[c][i] * (d[c] * f)).sum();
+            s[0].add(p.m[i] * w);
+        });
+        w
+    }
+
     /// The driving state (phases and generator) for checkpoints, once a
     /// stirred run has taken a step.
     pub fn stirring(&self) -> Option<&Stirring> {

@@ -119,18 +119,18 @@ pub(crate) struct RunArgs {
     #[arg(long, value_parser = choice::<FirstStep>())]
     pub(crate) first_step: Option<FirstStep>,
     /// How particles share time steps (default: the case's, `block`;
-    /// `global` where the run stirs, for a restart of a global run's
-    /// checkpoint, and for a scene of your own stopped by `--steps`
-    /// alone). `block` gives each particle its own power-of-two fraction
+    /// `global` where the run stirs (its particles all need about the
+    /// same step), for a restart of a global run's checkpoint, and for a
+    /// scene of your own stopped by `--steps` alone). `block` gives each particle its own power-of-two fraction
     /// of a longest step (`--dt-max`), with a limiter: a blast's cold gas
     /// then takes a few long steps while the shock takes many short ones;
     /// `--steps N` counts its sub-steps and the run stops at the end time
     /// at the latest. `global`: one step for all, the seed paper's and
     /// SPH-EXA's integrator. `kdk`: the block integrator with every
     /// particle in the smallest bin. `block` covers every scheme and
-    /// equation of state, with or without self-gravity, but not
-    /// turbulence driving yet; snapshots asked for at a time hold the
-    /// state at that time, checkpoints wait for a synchronisation point
+    /// equation of state, with or without self-gravity or driving;
+    /// snapshots asked for at a time hold the state at that time,
+    /// checkpoints wait for a synchronisation point
     /// (`docs/block-timesteps.md`).
     #[arg(long, value_parser = choice::<TimeSteps>())]
     pub(crate) time_steps: Option<TimeSteps>,
@@ -212,8 +212,9 @@ pub(crate) struct RunArgs {
     /// Bound of the momentum drift |p - p0| relative to the momentum scale
     /// (the largest sqrt(2 M (E_kin + |E_int|)) so far: M times the rms of
     /// speed and thermal speed), a number >= 0. Left at its default 1e-10,
-    /// runs with self-gravity use 1e-4 (the tree's forces conserve momentum
-    /// only to its accuracy).
+    /// runs with self-gravity or block time steps use 1e-4 (the tree's
+    /// forces conserve momentum only to its accuracy; under block steps a
+    /// pair's two forces act over different steps).
     #[arg(long, value_name = "X", default_value_t = DEFAULT_MOMENTUM_BOUND, allow_negative_numbers = true,
           value_parser = parse_non_negative)]
     pub(crate) max_momentum_drift: f64,

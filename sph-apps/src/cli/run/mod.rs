@@ -12,7 +12,7 @@ use crate::cli::parse::CheckpointSpec;
 use crate::cli::start_threads;
 use crate::output::snapshot::{self as snapfile, Schedule};
 use crate::simulation::{CheckpointEvery, Outputs, Progress, SnapshotFormat, Stop};
-use crate::watch::{Bounds, Watch, GRAVITY_MOMENTUM_BOUND};
+use crate::watch::{Bounds, Watch};
 use crate::{cases, checkpoint, AppError, Simulation};
 use args::{CurveArg, FormatArg, RunArgs, DEFAULT_MOMENTUM_BOUND};
 use clap::ArgMatches;
@@ -144,15 +144,11 @@ fn user_scene(
 }
 
 /// The time steps of a run that does not name them: the case's (block
-/// steps, global where it stirs), global where `--stir` asks for driving
-/// (not covered by block steps yet) or where a scene of the user's own
-/// stops after `--steps` alone (block steps need an end time for their
-/// time line).
+/// steps, global for driven turbulence, whose particles all need about
+/// the same step), or global where a scene of the user's own stops after
+/// `--steps` alone (block steps need an end time for their time line).
 fn default_time_steps(a: &RunArgs, case: &dyn cases::Case, user_scene: bool) -> TimeSteps {
-    // A stirring case's own default is already global; `--stir` may turn
-    // driving on for a case that does not stir.
-    let stir_on = a.stir.as_ref().is_some_and(|s| s.0.is_some());
-    if stir_on || (user_scene && a.end_time.is_none()) {
+    if user_scene && a.end_time.is_none() {
         TimeSteps::Global
     } else {
         case.default_time_steps()
@@ -341,6 +337,7 @@ fn execute(a: RunArgs) -> Result<(), AppError> {
         loaded.as_ref().map_or(f64::NEG_INFINITY, |l| l.state.t),
     )?;
     let gravity = scene.config.gravity.is_some();
+    let block = scene.config.time_steps.on_time_line();
     let n = scene.total;
     if !a.quiet && root {
         eprintln!(
@@ -370,9 +367,11 @@ fn execute(a: RunArgs) -> Result<(), AppError> {
         }
         sim.set_rank_timings(a.rank_timings);
         sim.set_after_step(Some(crate::memory::return_free_heap_to_os));
-        // Self-gravity's default momentum bound is the tree's accuracy.
-        let momentum = if a.max_momentum_drift == DEFAULT_MOMENTUM_BOUND && gravity {
-            GRAVITY_MOMENTUM_BOUND
+        // Left at its default, the momentum bound is the run's: the tree's
+        // accuracy with self-gravity, the time-stepping error under block
+        // steps.
+        let momentum = if a.max_momentum_drift == DEFAULT_MOMENTUM_BOUND {
+            Bounds::for_run(gravity, block).momentum
         } else {
             a.max_momentum_drift
         };
