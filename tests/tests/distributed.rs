@@ -33,7 +33,7 @@ use std::time::{Duration, Instant};
 /// Particles per side and steps of each run: (case, side, steps). Every
 /// registered case runs (with [`DEFAULT_SIZE`] unless listed here), then
 /// the test-only `drift` case.
-const SIZES: [(&str, usize, u64); 12] = [
+const SIZES: [(&str, usize, u64); 13] = [
     ("sedov", 24, 20),
     // Its box is 0.25 across: 32 per unit length gives the kernel room.
     ("wind-shock", 32, 20),
@@ -48,6 +48,11 @@ const SIZES: [(&str, usize, u64); 12] = [
     ("kelvin-helmholtz-block", 16, 30),
     // Block steps with pressure-energy volumes, the two gases in bins.
     ("isobaric-cube-block", 10, 30),
+    // Block steps with driving: kept stirring accelerations migrate, the
+    // driving's net force and work are exact sums (from rest every
+    // particle takes the same step: sub-steps where part of a stirred gas
+    // is active are checked across ranks in sph-core/tests/stirred.rs).
+    ("turbulence-block", 16, 30),
     ("square-patch", 20, 20),
     ("noh", 20, 20),
     ("drift", 16, 30),
@@ -58,10 +63,10 @@ const DEFAULT_SIZE: (usize, u64) = (16, 20);
 
 /// The runs: every registered case, then `drift`, `sedov-ve` and
 /// `sedov-block`, `sedov-best-block`, `evrard-block`,
-/// `kelvin-helmholtz-block` and `isobaric-cube-block` (block time steps:
-/// wake-ups brought to their owners, halos refreshed between syncs,
-/// gravity for the active particles on a drifted tree, the choice of
-/// each new time line), with
+/// `kelvin-helmholtz-block`, `isobaric-cube-block` and `turbulence-block`
+/// (block time steps: wake-ups brought to their owners, halos refreshed
+/// between syncs, gravity for the active particles on a drifted tree, the
+/// choice of each new time line, driving), with
 /// their sizes (only those in `SPH_DISTRIBUTED_ONLY`, when set).
 fn runs() -> Vec<(&'static str, usize, u64)> {
     let only = std::env::var("SPH_DISTRIBUTED_ONLY").ok();
@@ -75,6 +80,7 @@ fn runs() -> Vec<(&'static str, usize, u64)> {
             "evrard-block",
             "kelvin-helmholtz-block",
             "isobaric-cube-block",
+            "turbulence-block",
         ])
         .filter(|case| {
             only.as_ref()
@@ -140,7 +146,7 @@ fn scene(case: &str) -> Scene {
         s.config.timestep.first_step = sph_core::timestep::FirstStep::Criteria;
         return s;
     }
-    if let Some(base) = ["evrard", "kelvin-helmholtz", "isobaric-cube"]
+    if let Some(base) = ["evrard", "kelvin-helmholtz", "isobaric-cube", "turbulence"]
         .into_iter()
         .find(|b| case.strip_suffix("-block") == Some(*b))
     {
@@ -165,6 +171,7 @@ fn line_end(case: &str) -> f64 {
     match case {
         "evrard-block" | "isobaric-cube-block" => 1.0,
         "kelvin-helmholtz-block" => 1.5,
+        "turbulence-block" => 10.0,
         _ => 0.05,
     }
 }
