@@ -92,6 +92,50 @@ fn a_restarted_run_continues_bit_identically() {
     assert!(e.contains("sedov") && e.contains("noh"), "{e}");
 }
 
+/// `sphexa run CASE -n SIDE` under block time steps, checkpoints due
+/// every 10 sub-steps (all kept) and the final particles written, into
+/// `out`, with `extra` options.
+fn block_run(case: &str, side: &str, out: &Path, extra: &[&str]) {
+    let mut args = vec![
+        case,
+        "-n",
+        side,
+        "-q",
+        "--time-steps",
+        "block",
+        "--checkpoint-every",
+        "10",
+        "--checkpoint-keep",
+        "0",
+        "--write-particles",
+        "--out",
+        s(out),
+    ];
+    args.extend_from_slice(extra);
+    ok(&args);
+}
+
+/// The checkpoint files of the run in `dir`, sorted.
+fn checkpoints(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir.join("checkpoints"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+/// Each of `files` is the same, byte for byte, in `a` and `b`.
+fn same_files(a: &Path, b: &Path, files: &[&str]) {
+    for file in files {
+        let (fa, fb) = (
+            std::fs::read(a.join(file)).unwrap(),
+            std::fs::read(b.join(file)).unwrap(),
+        );
+        assert!(fa == fb, "{file} differs after the restart");
+    }
+}
+
 /// Block time steps: checkpoints fall due every 10 sub-steps and are
 /// written at the next synchronisation point (every particle's step
 /// ended). Sedov 16^3 to t = 0.05 in one run against 55 sub-steps, then a
@@ -102,57 +146,29 @@ fn a_restarted_run_continues_bit_identically() {
 fn a_restarted_block_step_run_continues_bit_identically() {
     let dir = scratch("sedov-block");
     let (a, b) = (dir.join("a"), dir.join("b"));
-    let run = |out: &Path, extra: &[&str]| {
-        let mut args = vec![
-            "sedov",
-            "-n",
-            "16",
-            "-q",
-            "--time-steps",
-            "block",
-            "--checkpoint-every",
-            "10",
-            "--checkpoint-keep",
-            "0",
-            "--write-particles",
-            "--out",
-            s(out),
-        ];
-        args.extend_from_slice(extra);
-        ok(&args);
-    };
+    let run = |out: &Path, extra: &[&str]| block_run("sedov", "16", out, extra);
     run(&a, &["--end-time", "0.05"]);
     run(&b, &["--steps", "55"]);
-    let listing = |d: &Path| -> Vec<String> {
-        let mut v: Vec<String> = std::fs::read_dir(d.join("checkpoints"))
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
-        v.sort();
-        v
-    };
     // Due at 10, 20, ...; written where every particle's step ends.
-    let written = listing(&a);
+    let written = checkpoints(&a);
     assert!(
         written.len() >= 2 && !written.contains(&"checkpoint_00000010.h5".to_string()),
         "{written:?}"
     );
     // The last checkpoint of the run stopped after 55 sub-steps.
-    let last = listing(&b).pop().expect("a checkpoint of the 55 sub-steps");
+    let last = checkpoints(&b)
+        .pop()
+        .expect("a checkpoint of the 55 sub-steps");
     let ckpt = b.join("checkpoints").join(last);
     let e = refused(&["--restart", s(&ckpt), "--time-steps", "global", "-q"]);
     assert!(e.contains("block-step"), "{e}");
     ok(&["--restart", s(&ckpt), "--end-time", "0.05", "-q"]);
-    for file in ["conserved.csv", "particles.csv"] {
-        let (fa, fb) = (
-            std::fs::read(a.join(file)).unwrap(),
-            std::fs::read(b.join(file)).unwrap(),
-        );
-        assert!(fa == fb, "{file} differs after the restart");
-    }
+    same_files(&a, &b, &["conserved.csv", "particles.csv"]);
     // The end's checkpoint (the same sub-step in both).
-    let end = listing(&a).pop().expect("checkpoints of the straight run");
-    assert_eq!(listing(&b).last(), Some(&end));
+    let end = checkpoints(&a)
+        .pop()
+        .expect("checkpoints of the straight run");
+    assert_eq!(checkpoints(&b).last(), Some(&end));
     assert_same_state(
         &read(&a.join("checkpoints").join(&end)),
         &read(&b.join("checkpoints").join(&end)),
@@ -187,43 +203,15 @@ fn a_restarted_block_step_run_continues_bit_identically() {
 fn a_restarted_stirred_block_step_run_continues_bit_identically() {
     let dir = scratch("turbulence-block");
     let (a, b) = (dir.join("a"), dir.join("b"));
-    let run = |out: &Path, extra: &[&str]| {
-        let mut args = vec![
-            "turbulence",
-            "-n",
-            "8",
-            "-q",
-            "--time-steps",
-            "block",
-            "--checkpoint-every",
-            "10",
-            "--checkpoint-keep",
-            "0",
-            "--write-particles",
-            "--out",
-            s(out),
-        ];
-        args.extend_from_slice(extra);
-        ok(&args);
-    };
+    let run = |out: &Path, extra: &[&str]| block_run("turbulence", "8", out, extra);
     run(&a, &["--steps", "60"]);
     run(&b, &["--steps", "30"]);
-    let mut written: Vec<String> = std::fs::read_dir(b.join("checkpoints"))
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    written.sort();
+    let mut written = checkpoints(&b);
     let ckpt = b
         .join("checkpoints")
         .join(written.pop().expect("a checkpoint"));
     ok(&["--restart", s(&ckpt), "--steps", "60", "-q"]);
-    for file in ["conserved.csv", "particles.csv"] {
-        let (fa, fb) = (
-            std::fs::read(a.join(file)).unwrap(),
-            std::fs::read(b.join(file)).unwrap(),
-        );
-        assert!(fa == fb, "{file} differs after the restart");
-    }
+    same_files(&a, &b, &["conserved.csv", "particles.csv"]);
     // The driving did work in both.
     let conserved = std::fs::read_to_string(a.join("conserved.csv")).unwrap();
     let last = conserved.lines().last().unwrap();

@@ -3,7 +3,7 @@
 //! no net momentum, and the same bits on 1, 2 and 4 ranks and 1 or 2
 //! threads, with one global step and under block time steps.
 
-use sph_comm::{run_ranks, Communicator, SerialComm};
+use sph_comm::{run_ranks, Communicator, SerialComm, ThreadComm};
 use sph_core::stirring::{StirParams, Stirring};
 use sph_core::timestep::FirstStep;
 use sph_core::{Eos, Hydro, HydroConfig, Particles, Scheme, StepReport, TimeSteps};
@@ -98,6 +98,42 @@ fn run_from<C: Communicator>(
         .collect()
 }
 
+/// The bits of every report's conserved sums, work and step.
+fn bits(r: &[StepReport]) -> Vec<u64> {
+    r.iter()
+        .flat_map(|s| {
+            let c = s.conserved;
+            [
+                c.e_kin,
+                c.e_int,
+                c.momentum[0],
+                c.momentum[1],
+                c.momentum[2],
+                s.external_work,
+                s.dt,
+            ]
+        })
+        .map(f64::to_bits)
+        .collect()
+}
+
+/// `run` on 1, 2 and 4 ranks with 1 and 2 threads gives `serial` on every
+/// rank.
+fn on_every_rank_count(serial: &[u64], run: impl Fn(ThreadComm) -> Vec<u64> + Sync) {
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        for ranks in [1, 2, 4] {
+            let out = pool.install(|| run_ranks(ranks, &run));
+            for (r, b) in out.iter().enumerate() {
+                assert_eq!(b, serial, "{ranks} ranks x {threads} threads: rank {r}");
+            }
+        }
+    }
+}
+
 /// A uniform acceleration field held still for a time t gives each
 /// particle `v = a t`: kinetic energy and work both `t^2 / 2 sum m |a|^2`.
 #[test]
@@ -154,35 +190,8 @@ fn a_frozen_field_does_the_work_it_reports() {
 fn ranks_and_threads_do_not_change_a_bit() {
     let config = config(StirParams::default());
     let steps = 8;
-    let bits = |r: &[StepReport]| -> Vec<u64> {
-        r.iter()
-            .flat_map(|s| {
-                let c = s.conserved;
-                [
-                    c.e_kin,
-                    c.e_int,
-                    c.momentum[0],
-                    c.momentum[2],
-                    s.external_work,
-                    s.dt,
-                ]
-            })
-            .map(f64::to_bits)
-            .collect()
-    };
     let serial = bits(&run(SerialComm::new(), config, steps));
-    for threads in [1, 2] {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        for ranks in [1, 2, 4] {
-            let out = pool.install(|| run_ranks(ranks, |comm| bits(&run(comm, config, steps))));
-            for (r, b) in out.iter().enumerate() {
-                assert_eq!(b, &serial, "{ranks} ranks x {threads} threads: rank {r}");
-            }
-        }
-    }
+    on_every_rank_count(&serial, |comm| bits(&run(comm, config, steps)));
     // And the driving did something.
     let reports = run(SerialComm::new(), config, steps);
     assert!(reports.last().unwrap().external_work > 0.0);
@@ -207,41 +216,11 @@ fn block_steps_keep_the_bits_on_every_rank_count() {
         }
         p
     };
-    let bits = |r: &[StepReport]| -> Vec<u64> {
-        r.iter()
-            .flat_map(|s| {
-                let c = s.conserved;
-                [
-                    c.e_kin,
-                    c.e_int,
-                    c.momentum[0],
-                    c.momentum[1],
-                    s.external_work,
-                    s.dt,
-                ]
-            })
-            .map(f64::to_bits)
-            .collect()
-    };
     let reports = run_from(SerialComm::new(), config, sheared(0, 1), steps);
-    let serial = bits(&reports);
-    for threads in [1, 2] {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        for ranks in [1, 2, 4] {
-            let out = pool.install(|| {
-                run_ranks(ranks, |comm| {
-                    let p = sheared(comm.rank(), comm.size());
-                    bits(&run_from(comm, config, p, steps))
-                })
-            });
-            for (r, b) in out.iter().enumerate() {
-                assert_eq!(b, &serial, "{ranks} ranks x {threads} threads: rank {r}");
-            }
-        }
-    }
+    on_every_rank_count(&bits(&reports), |comm| {
+        let p = sheared(comm.rank(), comm.size());
+        bits(&run_from(comm, config, p, steps))
+    });
     // Part of the gas stepped alone, and the driving did work (of either
     // sign: the gas streams through the field).
     let n = (N * N * N) as u64;

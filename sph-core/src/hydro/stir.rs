@@ -26,20 +26,13 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         bbox: &BoundingBox,
         owned: Range<usize>,
     ) -> Result<(), CoreError> {
-        let Some(params) = self.config.stirring else {
+        let advanced =
+            advance_driving(&mut self.stirring, self.config.stirring, bbox, self.dt_prev);
+        let Some(stirring) = advanced? else {
             return Ok(());
         };
-        let stirring = match &mut self.stirring {
-            Some(s) => s,
-            slot => slot.insert(Stirring::new(params, bbox)?),
-        };
-        stirring.advance(self.dt_prev);
         let n = owned.len();
-        let [sx, sy, sz] = &mut self.buf.stir;
-        for s in [&mut *sx, &mut *sy, &mut *sz] {
-            s.clear();
-            s.resize(n, 0.0);
-        }
+        let [sx, sy, sz] = zeroed(&mut self.buf.stir, n);
         let r = owned.clone();
         stirring.accelerate(&p.x[r.clone()], &p.y[r.clone()], &p.z[r], sx, sy, sz);
 
@@ -117,26 +110,18 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         owned: Range<usize>,
         active: &[bool],
     ) -> Result<(), CoreError> {
-        let Some(params) = self.config.stirring else {
+        let advanced =
+            advance_driving(&mut self.stirring, self.config.stirring, bbox, self.dt_prev);
+        let Some(stirring) = advanced? else {
             return Ok(());
         };
-        let stirring = match &mut self.stirring {
-            Some(s) => s,
-            slot => slot.insert(Stirring::new(params, bbox)?),
-        };
-        stirring.advance(self.dt_prev);
         let o = owned.start;
         let [px, py, pz] = &mut self.buf.stir_at;
         for (at, pos) in [(&mut *px, &p.x), (&mut *py, &p.y), (&mut *pz, &p.z)] {
             at.clear();
             at.extend(owned.clone().filter(|i| active[i - o]).map(|i| pos[i]));
         }
-        let n = px.len();
-        let [sx, sy, sz] = &mut self.buf.stir;
-        for s in [&mut *sx, &mut *sy, &mut *sz] {
-            s.clear();
-            s.resize(n, 0.0);
-        }
+        let [sx, sy, sz] = zeroed(&mut self.buf.stir, px.len());
         stirring.accelerate(px, py, pz, sx, sy, sz);
 
         // Scatter the new accelerations into the kept ones, then the sums
@@ -234,4 +219,32 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         self.stirring = Some(s);
         Ok(())
     }
+}
+
+/// The driving in `slot` (built from `params` and the box at the first
+/// call) advanced by `dt`: `None` without stirring.
+fn advance_driving<'a>(
+    slot: &'a mut Option<Stirring>,
+    params: Option<crate::stirring::StirParams>,
+    bbox: &BoundingBox,
+    dt: f64,
+) -> Result<Option<&'a Stirring>, CoreError> {
+    let Some(params) = params else {
+        return Ok(None);
+    };
+    let stirring = match slot {
+        Some(s) => s,
+        slot => slot.insert(Stirring::new(params, bbox)?),
+    };
+    stirring.advance(dt);
+    Ok(Some(stirring))
+}
+
+/// The three acceleration buffers, each `n` zeros.
+fn zeroed(bufs: &mut [Vec<f64>; 3], n: usize) -> &mut [Vec<f64>; 3] {
+    for s in bufs.iter_mut() {
+        s.clear();
+        s.resize(n, 0.0);
+    }
+    bufs
 }
