@@ -169,7 +169,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
     /// This rank's exact partial sum of the stirring's work over a drift
     /// under block time steps: `sum m a_s . dx` with `a_s` the kept
     /// stirring acceleration and `dx` the drift's position change (the
-    /// particle's step displacement times `share[i]`, its part of the
+    /// particle's step displacement times `share(i)`, its part of the
     /// step). Zero without stirring.
     pub(super) fn stir_drift_work(
         &self,
