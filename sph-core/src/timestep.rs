@@ -16,7 +16,10 @@ pub struct TimestepParams {
     /// Factor `eta` of the acceleration criterion `eta sqrt(eps / |a|)`
     /// (used when the run has self-gravity).
     pub eta_acc: f64,
-    /// Length `eps` of the acceleration criterion.
+    /// Length `eps` of the acceleration criterion where gravity is not
+    /// softened (SPH-EXA's 0.005). With softened gravity each particle's
+    /// `eps` is its own softening length, so the criterion follows the
+    /// resolution (as GADGET's and SWIFT's do).
     pub eps_acc: f64,
     /// Factor `k_u` of the energy criterion `k_u min u_i / |du_i/dt|` over
     /// the particles whose internal energy falls: at first order no step
@@ -225,9 +228,10 @@ impl TimestepParams {
         1u32 << self.limiter_delta.min(31)
     }
 
-    /// `dt = min(Kcour min h/v_sig, Krho / max|div v|, eta sqrt(eps/max|a|),
+    /// `dt = min(Kcour min h/v_sig, Krho / max|div v|, eta / sqrt(max |a|/eps),
     /// k_u / max(-du/dt / u), growth * dt_prev)`, from stats already
-    /// reduced over all particles (and ranks); `max_acc` is zero when the
+    /// reduced over all particles (and ranks); `max_acc` (the largest
+    /// [`acc_per_length`](Self::acc_per_length)) is zero when the
     /// acceleration criterion is off, `max_cooling` (the largest
     /// `-du_i/dt / u_i` over particles with `u_i > 0`) zero when no
     /// internal energy falls or the equation of state ignores `u`.
@@ -280,9 +284,9 @@ impl TimestepParams {
 
     /// The steps the four criteria allow, `[courant, divergence,
     /// acceleration, energy]`, from `h / v_sig`, `|div v|` (the
-    /// compression the scheme's form counts), `|a|` (0: criterion off) and
-    /// `-du/dt / u` (0: not falling): of one particle, or the extremes
-    /// over all.
+    /// compression the scheme's form counts), `|a| / eps` (0: criterion
+    /// off) and `-du/dt / u` (0: not falling): of one particle, or the
+    /// extremes over all.
     fn criteria(&self, h_over_vsig: f64, abs_div_v: f64, acc: f64, cooling: f64) -> [f64; 4] {
         let courant = self.k_courant * h_over_vsig;
         let div = if abs_div_v > 0.0 {
@@ -291,7 +295,7 @@ impl TimestepParams {
             f64::INFINITY
         };
         let acc = if acc > 0.0 {
-            self.eta_acc * (self.eps_acc / acc).sqrt()
+            self.eta_acc / acc.sqrt()
         } else {
             f64::INFINITY
         };
@@ -305,8 +309,8 @@ impl TimestepParams {
 
     /// One particle's own step: the smallest of the criteria of
     /// [`dt_limited`](Self::dt_limited) with its own `h / v_sig`,
-    /// compression `|div v|`, `|a|` (0 without the acceleration criterion)
-    /// and cooling rate `-du/dt / u` (0 unless falling); no growth limit.
+    /// compression `|div v|`, `|a| / eps` ([`acc_per_length`](Self::acc_per_length);
+    /// 0 without the acceleration criterion) and cooling rate `-du/dt / u` (0 unless falling); no growth limit.
     /// The global step is at most every particle's.
     ///
     /// ```
@@ -318,6 +322,21 @@ impl TimestepParams {
     pub fn particle_dt(&self, h_over_vsig: f64, abs_div_v: f64, acc: f64, cooling: f64) -> f64 {
         let [courant, div, acc, energy] = self.criteria(h_over_vsig, abs_div_v, acc, cooling);
         courant.min(div).min(acc).min(energy)
+    }
+
+    /// `|a| / eps`, what the acceleration criterion `eta sqrt(eps / |a|)`
+    /// reads: `eps` the particle's gravitational softening length where
+    /// gravity is softened, else [`eps_acc`](Self::eps_acc).
+    ///
+    /// ```
+    /// use sph_core::timestep::TimestepParams;
+    /// let p = TimestepParams::default();
+    /// // Softened within 0.1: eta sqrt(0.1 / 10) = 0.02.
+    /// assert!((p.particle_dt(1.0, 0.0, p.acc_per_length(10.0, Some(0.1)), 0.0) - 0.02).abs() < 1e-15);
+    /// assert_eq!(p.acc_per_length(10.0, None), 10.0 / p.eps_acc);
+    /// ```
+    pub fn acc_per_length(&self, acc: f64, softening_length: Option<f64>) -> f64 {
+        acc / softening_length.unwrap_or(self.eps_acc)
     }
 
     /// The previous step the growth limit of step `step` (1 for the

@@ -694,11 +694,11 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
     /// gravity, cooling), into `block.dt_criteria`.
     fn criteria_steps(&mut self, p: &Particles, owned: Range<usize>, first: bool) {
         let ts = self.config.timestep;
+        let criterion = self.acc_criterion();
         let o = owned.start;
         let b = &mut self.block;
         let (hv, comp) = (&self.buf.h_over_vsig, &self.buf.compression);
         let energy = self.config.eos.uses_internal_energy();
-        let gravity = self.gravity.is_some();
         let active = &b.active;
         // The start ramp, never more than the limiter's factor below a
         // particle's own criteria.
@@ -715,11 +715,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 let cooling = super::stages::cooling_rate(p, i, energy);
                 // The acceleration criterion with self-gravity, as the
                 // global step has it.
-                let acc = if gravity {
-                    (p.ax[i] * p.ax[i] + p.ay[i] * p.ay[i] + p.az[i] * p.az[i]).sqrt()
-                } else {
-                    0.0
-                };
+                let acc = criterion.at(p, i);
                 let own = ts.particle_dt(hv[i], comp[i], acc, cooling);
                 *out = own.min(ramp.max(own / depth));
             });

@@ -16,7 +16,7 @@ use crate::momentum::{
 };
 use crate::neighbors::find_neighbors_of;
 use crate::scheme::{Viscosity, Volume};
-use crate::{CoreError, Particles};
+use crate::{CoreError, Particles, TimestepParams};
 use rayon::prelude::*;
 use sph_comm::{Communicator, ReduceOp};
 use sph_gravity::{Decomposition, GravityStats, Targets};
@@ -247,15 +247,11 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
     ) -> [u64; BIN_OFFSETS] {
         let ts = &self.config.timestep;
         let (hv, comp) = (&self.buf.h_over_vsig, &self.buf.compression);
-        let gravity = self.gravity.is_some();
+        let criterion = self.acc_criterion();
         let mut counts = owned
             .into_par_iter()
             .map(|i| {
-                let acc = if gravity {
-                    (p.ax[i] * p.ax[i] + p.ay[i] * p.ay[i] + p.az[i] * p.az[i]).sqrt()
-                } else {
-                    0.0
-                };
+                let acc = criterion.at(p, i);
                 let cooling = cooling_rate(p, i, energy);
                 let own = ts.particle_dt(hv[i], comp[i], acc, cooling);
                 // The global step is at most every particle's: k >= 0.
@@ -283,9 +279,19 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         counts
     }
 
+    /// What the acceleration criterion reads per particle (off without
+    /// gravity).
+    pub(super) fn acc_criterion(&self) -> AccCriterion {
+        AccCriterion {
+            softening: self.gravity.as_ref().map(|g| g.params().softening),
+            timestep: self.config.timestep,
+        }
+    }
+
     /// Adds self-gravity to the owned particles' accelerations (when the
-    /// run has it) and returns their largest |a| (0 without gravity: the
-    /// acceleration criterion is off).
+    /// run has it) and returns their largest `|a| / eps`
+    /// ([`AccCriterion::at`]; 0 without gravity: the acceleration
+    /// criterion is off).
     pub(super) fn add_gravity(
         &mut self,
         p: &mut Particles,
@@ -306,9 +312,8 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 p.az[i] += f.az[k];
             }
         }
-        Ok(owned
-            .map(|i| (p.ax[i] * p.ax[i] + p.ay[i] * p.ay[i] + p.az[i] * p.az[i]).sqrt())
-            .fold(0.0, f64::max))
+        let criterion = self.acc_criterion();
+        Ok(owned.map(|i| criterion.at(p, i)).fold(0.0, f64::max))
     }
 
     /// Over the owned particles: `[max_k |v_n,k|, max_k |a_k|, max h_next,
@@ -580,6 +585,31 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             .par_iter_mut()
             .zip(p.rho[owned].par_iter())
             .for_each(|(u, &rho)| *u = eos.energy(rho).unwrap_or(*u));
+    }
+}
+
+/// The acceleration criterion's input per particle.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct AccCriterion {
+    /// The gravity's softening scale `s`; `None` without gravity.
+    softening: Option<f64>,
+    timestep: TimestepParams,
+}
+
+impl AccCriterion {
+    /// What particle `i`'s acceleration criterion reads, `|a_i| / eps_i`
+    /// ([`TimestepParams::acc_per_length`]; 0 without gravity: the
+    /// criterion is off). `eps_i = 2 s h_i`, the softening length of a
+    /// pair of particles like `i` (pairs are softened within
+    /// `s (h_i + h_j)`), so the criterion follows each particle's
+    /// resolution; the fixed length where `s = 0`.
+    pub(super) fn at(&self, p: &Particles, i: usize) -> f64 {
+        let Some(scale) = self.softening else {
+            return 0.0;
+        };
+        let acc = (p.ax[i] * p.ax[i] + p.ay[i] * p.ay[i] + p.az[i] * p.az[i]).sqrt();
+        let eps = (scale > 0.0).then(|| 2.0 * scale * p.h[i]);
+        self.timestep.acc_per_length(acc, eps)
     }
 }
 
