@@ -109,6 +109,9 @@ pub(super) struct BlockState {
     new_bin: Vec<u8>,
     neighbour_bin: Vec<f64>,
     wake: Vec<AtomicU8>,
+    /// Per local particle, the bin a wake-up request must be below to
+    /// change anything ([`WakeUp::limit`]).
+    wake_limit: Vec<u8>,
 }
 
 impl BlockState {
@@ -643,6 +646,18 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         // particle woken by another wakes its own neighbours in the same
         // sub-step, so every active particle ends within the factor of
         // all its neighbours (a fixed point: the same on any rank count).
+        // A request changes an owned particle's bin only below its
+        // current bin (inactive) or its new one (active; the loop only
+        // lowers that further); a halo's is its owner's business.
+        b.wake_limit.clear();
+        b.wake_limit.resize(n, u8::MAX);
+        for k in 0..owned.len() {
+            b.wake_limit[o + k] = if b.active[k] {
+                b.new_bin[k]
+            } else {
+                bin_of(p.bin[o + k]).0
+            };
+        }
         let mut lowered: Vec<bool> = Vec::new();
         loop {
             let driver = pair_driver(&self.kernel, bbox, p, &self.list)?;
@@ -653,6 +668,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 first: o,
                 delta,
                 wake: &b.wake,
+                limit: &b.wake_limit,
             };
             if lowered.is_empty() {
                 driver.run(&stage, []);
@@ -1156,12 +1172,16 @@ struct WakeUp<'a> {
     first: usize,
     delta: u8,
     wake: &'a [AtomicU8],
+    /// Per local particle: requests at or above it change nothing, so a
+    /// group whose smallest request reaches it skips the partner (most
+    /// pairs: neighbours' bins are within the factor already).
+    limit: &'a [u8],
 }
 
 impl PairStage for WakeUp<'_> {
-    /// Squared reach of the targets, and the bin each asks of its
-    /// neighbours (infinite in lanes without an active target).
-    type Sums = (F64s, F64s);
+    /// Squared reach of the targets, the bin each asks of its neighbours
+    /// (infinite in lanes without an active target), and the smallest.
+    type Sums = (F64s, F64s, f64);
     type Out<'o> = [&'o mut [f64]; 0];
     type Stats = ();
 
@@ -1174,10 +1194,14 @@ impl PairStage for WakeUp<'_> {
                 f64::INFINITY
             }
         });
-        (reach * reach, F64s::from_array(ask))
+        let smallest = ask.iter().copied().fold(f64::INFINITY, f64::min);
+        (reach * reach, F64s::from_array(ask), smallest)
     }
 
     fn pair(&self, s: &mut Self::Sums, j: usize, _d: [F64s; 3], r2: F64s) {
+        if s.2 >= f64::from(self.limit[j]) {
+            return;
+        }
         let reach_j = self.h[j] * self.support;
         let (_, w) = neighbour_lanes(r2, s.0, reach_j * reach_j);
         let ask = w
