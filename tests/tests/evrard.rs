@@ -79,14 +79,15 @@ fn evrard_30_energies_match_reference() {
 /// total energy of the end state (every particle fresh) within 5e-3 of
 /// the start (the global test's bound through the bounce is 1e-2), and
 /// fewer than 60% of the particles updated per sub-step on average.
-/// Measured (2026-12-04): at 32 t = 0.8 -1.9% / +0.8% / -0.7%, t = 1.0
-/// +2.2% / -1.5% / -0.7% (global -2.6 / +0.6 / -0.6 and +0.7 / -1.8 /
-/// -1.2), drift -8.2e-4 (global -6.5e-4), 3.78 M updates in 578
-/// sub-steps (0.38 per sub-step; the global run: 7.68 M in 448 steps); at
-/// 24 -3.6 / +0.7 / -1.3% and -0.2 / -3.0 / -2.0%, drift -2.9e-3 (global
-/// -5e-5: an inactive particle's held gravity lags its active
-/// neighbours', so pair forces are not equal and opposite within a
-/// sync), 1.39 M updates in 550 sub-steps.
+/// Measured (2026-12-06, the acceleration criterion on each particle's
+/// softening length): at 32 t = 0.8 -2.0% / +0.7% / -1.4%, t = 1.0
+/// +2.5% / -1.4% / -0.6% (global -2.6 / +0.6 / -0.6 and +0.7 / -1.8 /
+/// -1.2), drift -3.4e-3 (global 3.1e-4), 2.83 M updates in 637
+/// sub-steps (0.26 per sub-step; the global run: 7.68 M in 448 steps); at
+/// 24 -3.6 / +0.7 / -1.9% and -0.2 / -3.0 / -2.0%, drift -3.1e-3 (an
+/// inactive particle's held gravity lags its active neighbours', so
+/// pair forces are not equal and opposite within a sync), 1.13 M
+/// updates in 532 sub-steps (0.29 per sub-step).
 #[test]
 fn evrard_block_steps_energies_match_reference() {
     for side in [24, 32] {
