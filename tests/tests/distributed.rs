@@ -269,8 +269,9 @@ fn launcher() {
                     // Block steps: a particle whose time-step criterion
                     // lies within that error of a power-of-two boundary
                     // can take another bin, hence another step (evrard-block
-                    // at 16^3, 30 sub-steps: largest 2.0e-3, in one
-                    // particle's density; 99% of particles within 7.7e-5).
+                    // at 16^3, 30 sub-steps: largest 1.15e-3 on 2 and 4
+                    // ranks, 2026-12-06; 2.0e-3 before, in one particle's
+                    // density, 99% of particles within 7.7e-5).
                     let bound = if label.starts_with("serial") {
                         0.0
                     } else if case == "evrard-block" {
