@@ -406,14 +406,10 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         // The stirring's work up to now (that of the conserved sums above);
         // then the drift's, each particle along its share of its step.
         let external_work = self.external_work;
-        if self.config.stirring.is_some() {
-            let ticks = (next - ti) as f64;
-            let bins = &p.bin;
-            let mut work =
-                self.stir_drift_work(p, owned.clone(), |i| ticks / bin_of(bins[i]).ticks() as f64);
-            work.all_reduce(self.domain.comm());
-            self.external_work += work.value();
-        }
+        let ticks = (next - ti) as f64;
+        let bins = &p.bin;
+        self.external_work +=
+            self.stir_drift_work(p, owned.clone(), |i| ticks / bin_of(bins[i]).ticks() as f64);
         clock.lap(Stage::Integrate);
 
         let (nc_min, nc_max, h_max) =

@@ -313,7 +313,14 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         }
         self.stir(p, bbox, owned.clone())?;
         clock.lap(Stage::Stirring);
-        let acc_max = self.add_gravity(p, bbox, owned.clone(), Targets::ALL, step)?;
+        self.add_gravity(p, bbox, owned.clone(), Targets::ALL, step)?;
+        // The largest |a| / eps (0 without gravity: the acceleration
+        // criterion is off).
+        let criterion = self.acc_criterion();
+        let acc_max = owned
+            .clone()
+            .map(|i| criterion.at(p, i))
+            .fold(0.0, f64::max);
         clock.lap(Stage::Gravity);
 
         // One global sum: conserved quantities, neighbour and domain totals,

@@ -288,10 +288,8 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         }
     }
 
-    /// Adds self-gravity to the owned particles' accelerations (when the
-    /// run has it) and returns their largest `|a| / eps`
-    /// ([`AccCriterion::at`]; 0 without gravity: the acceleration
-    /// criterion is off).
+    /// Adds self-gravity to the owned `targets`' accelerations (when the
+    /// run has it).
     pub(super) fn add_gravity(
         &mut self,
         p: &mut Particles,
@@ -299,9 +297,9 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         owned: Range<usize>,
         targets: Targets<'_>,
         step: u64,
-    ) -> Result<f64, CoreError> {
+    ) -> Result<(), CoreError> {
         if self.gravity.is_none() {
-            return Ok(0.0);
+            return Ok(());
         }
         self.gravity_field(p, bbox, owned.clone(), targets, step)?;
         let f = &self.field;
@@ -312,8 +310,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 p.az[i] += f.az[k];
             }
         }
-        let criterion = self.acc_criterion();
-        Ok(owned.map(|i| criterion.at(p, i)).fold(0.0, f64::max))
+        Ok(())
     }
 
     /// Over the owned particles: `[max_k |v_n,k|, max_k |a_k|, max h_next,

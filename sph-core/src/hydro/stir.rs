@@ -37,21 +37,13 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         stirring.accelerate(&p.x[r.clone()], &p.y[r.clone()], &p.z[r], sx, sy, sz);
 
         let m = &p.m[owned.clone()];
-        let mut sums = exact_sums(n, |i, s: &mut [ExactSum; 4]| {
+        let sums = exact_sums(n, |i, s: &mut [ExactSum; 4]| {
             s[0].add(m[i]);
             s[1].add(m[i] * sx[i]);
             s[2].add(m[i] * sy[i]);
             s[3].add(m[i] * sz[i]);
         });
-        ExactSum::all_reduce_many(&mut sums, self.domain.comm());
-        let mass = sums[0].value();
-        let mean = [1, 2, 3].map(|k| {
-            if mass > 0.0 {
-                sums[k].value() / mass
-            } else {
-                0.0
-            }
-        });
+        let mean = global_mean(sums, self.domain.comm());
         let (ax, ay, az) = (
             &mut p.ax[owned.clone()],
             &mut p.ay[owned.clone()],
@@ -133,7 +125,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             p.stir_a[2][i] = sz[k];
         }
         let (m, kept) = (&p.m, &p.stir_a);
-        let mut sums = exact_sums(owned.len(), |k, s: &mut [ExactSum; 4]| {
+        let sums = exact_sums(owned.len(), |k, s: &mut [ExactSum; 4]| {
             let i = o + k;
             if active[k] {
                 s[0].add(m[i]);
@@ -142,15 +134,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 s[c + 1].add(m[i] * kept[c][i]);
             }
         });
-        ExactSum::all_reduce_many(&mut sums, self.domain.comm());
-        let mass = sums[0].value();
-        let shift = [1, 2, 3].map(|c| {
-            if mass > 0.0 {
-                sums[c].value() / mass
-            } else {
-                0.0
-            }
-        });
+        let shift = global_mean(sums, self.domain.comm());
         let a = [&mut p.ax, &mut p.ay, &mut p.az];
         for ((kept, a), shift) in p.stir_a.iter_mut().zip(a).zip(shift) {
             kept[owned.clone()]
@@ -166,29 +150,30 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         Ok(())
     }
 
-    /// This rank's exact partial sum of the stirring's work over a drift
-    /// under block time steps: `sum m a_s . dx` with `a_s` the kept
+    /// The stirring's work over a drift under block time steps, summed
+    /// exactly over all ranks: `sum m a_s . dx` with `a_s` the kept
     /// stirring acceleration and `dx` the drift's position change (the
     /// particle's step displacement times `share(i)`, its part of the
-    /// step). Zero without stirring.
+    /// step). Zero, and no collective, without stirring.
     pub(super) fn stir_drift_work(
         &self,
         p: &Particles,
         owned: Range<usize>,
         share: impl Fn(usize) -> f64 + Sync,
-    ) -> ExactSum {
+    ) -> f64 {
         if self.config.stirring.is_none() {
-            return ExactSum::default();
+            return 0.0;
         }
         let o = owned.start;
-        let [w] = exact_sums(owned.len(), |k, s: &mut [ExactSum; 1]| {
+        let [mut w] = exact_sums(owned.len(), |k, s: &mut [ExactSum; 1]| {
             let i = o + k;
             let f = share(i);
             let d = [p.dx[i], p.dy[i], p.dz[i]];
             let w: f64 = (0..3).map(|c| p.stir_a[c][i] * (d[c] * f)).sum();
             s[0].add(p.m[i] * w);
         });
-        w
+        w.all_reduce(self.domain.comm());
+        w.value()
     }
 
     /// The driving state (phases and generator) for checkpoints, once a
@@ -238,6 +223,20 @@ fn advance_driving<'a>(
     };
     stirring.advance(dt);
     Ok(Some(stirring))
+}
+
+/// `[sum m a_x, sum m a_y, sum m a_z] / sum m` over all ranks from this
+/// rank's exact sums `[m, m a_x, m a_y, m a_z]` (zero for zero mass).
+fn global_mean<C: Communicator>(mut sums: [ExactSum; 4], comm: &C) -> [f64; 3] {
+    ExactSum::all_reduce_many(&mut sums, comm);
+    let mass = sums[0].value();
+    [1, 2, 3].map(|k| {
+        if mass > 0.0 {
+            sums[k].value() / mass
+        } else {
+            0.0
+        }
+    })
 }
 
 /// The three acceleration buffers, each `n` zeros.
