@@ -267,6 +267,47 @@ proptest! {
         let ratio = common::net_force_ratio(&f, &m);
         prop_assert!(ratio <= 1e-13, "net force ratio {ratio}");
     }
+
+    /// Input checks find the first non-finite value of an array, however
+    /// long, wherever it sits, and whatever the finite values are (huge
+    /// ones included); arrays with none pass.
+    #[test]
+    fn first_non_finite_input_is_named(
+        n in 1usize..70,
+        bad in prop::option::of((0usize..70, 0usize..3, 0usize..5)),
+        seed in any::<u64>(),
+    ) {
+        let (x, mut y, z, m) = random_cloud(n, seed);
+        let mut h = vec![0.05; n];
+        // Finite values whose plain sum would overflow to infinity.
+        if n > 2 {
+            h[0] = f64::MAX;
+            h[1] = f64::MAX;
+        }
+        let mut expected = None;
+        if let Some((at, which, kind)) = bad {
+            let at = at % n;
+            let value = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY][which];
+            let (array, name) = match kind {
+                0 => (&mut y, "y"),
+                _ => (&mut h, "h"),
+            };
+            array[at] = value;
+            if kind > 1 {
+                // A second bad value after the first: the first is named.
+                array[(at + 1).min(n - 1)] = f64::NAN;
+            }
+            expected = Some((at, name));
+        }
+        let r = compute_gravity(&x, &y, &z, &m, Some(&h), &GravityParams::default());
+        match (expected, r) {
+            (None, Ok(_)) => {}
+            (Some((at, name)), Err(sph_gravity::GravityError::NonFinite { index, what, .. })) => {
+                prop_assert_eq!((index, what), (at, name));
+            }
+            (e, r) => prop_assert!(false, "expected {:?}, got {:?}", e, r.map(|_| ())),
+        }
+    }
 }
 
 /// The softened potential's gradient is the softened force (so energy is
