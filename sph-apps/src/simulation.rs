@@ -400,7 +400,29 @@ impl<C: Communicator> Simulation<C> {
     /// After every step the run's observers ([`StepObserver`]) write its
     /// lines and files in turn; an error stops the run with the files of
     /// the steps before it (and its last checkpoint) intact.
+    ///
+    /// Where the communicator allows it
+    /// ([`Communicator::may_drive_from_pool`]), the loop runs on a worker
+    /// of rayon's pool, so that its stages fork and join there instead of
+    /// waking the pool from outside and sleeping until each stage ends
+    /// (Evrard `-n 32`, 2 threads: block steps 19.2-21.0 -> 18.6-18.9 s,
+    /// global steps 44.6 -> 39.5 s; the same output to the bit).
     pub fn run(&mut self, stop: Stop, out: &Path, progress: Progress) -> Result<Summary, AppError> {
+        let on_pool = rayon::current_thread_index().is_some();
+        if !on_pool && self.hydro.domain().comm().may_drive_from_pool() {
+            rayon::scope(|_| self.run_here(stop, out, progress))
+        } else {
+            self.run_here(stop, out, progress)
+        }
+    }
+
+    /// [`Simulation::run`] on the calling thread.
+    fn run_here(
+        &mut self,
+        stop: Stop,
+        out: &Path,
+        progress: Progress,
+    ) -> Result<Summary, AppError> {
         let root = self.is_root();
         let n = self.total;
         let mut outputs = self.open_outputs(stop, out, progress)?;
@@ -974,10 +996,26 @@ mod tests {
             assert!(a.peak_density.is_finite() && a.min_pair_distance > 0.0);
             assert!(a.shock_radius.is_some(), "{case}: shock");
             assert_eq!(a.plateau_density.is_some(), case == "noh");
+            // One serial rank drives its loop from rayon's pool (the
+            // in-process ranks from their own threads): the same files.
+            let dir_s = crate::test_dir(&format!("simulation-{case}-serial"));
+            let kernel = KernelChoice::default().fast().expect("kernel");
+            let mut serial =
+                Simulation::new(scene(case), kernel, "default".into()).expect("pipeline");
+            assert!(serial.hydro.domain().comm().may_drive_from_pool());
+            serial.set_write_particles(true);
+            serial
+                .run(Stop::Steps(4), &dir_s, Progress::Quiet)
+                .expect("run");
             for file in ["conserved.csv", "profile.csv", "particles.csv"] {
                 let read = |d: &Path| std::fs::read(d.join(file)).expect("output");
                 assert!(read(&dir_a) == read(&dir_b), "{case}: {file} differs");
+                assert!(
+                    read(&dir_a) == read(&dir_s),
+                    "{case}: {file} differs on the pool"
+                );
             }
+            std::fs::remove_dir_all(dir_s).ok();
             // particles.csv: every particle once, in id order.
             let text = std::fs::read_to_string(dir_a.join("particles.csv")).expect("output");
             let ids: Vec<u64> = text

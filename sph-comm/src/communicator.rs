@@ -48,6 +48,18 @@ pub trait Communicator: Send + Sync {
     /// Waits until every rank has called `barrier`.
     fn barrier(&self);
 
+    /// Whether this rank may be driven from a worker of the process's
+    /// rayon pool rather than only from the thread that made it: where the
+    /// rank is alone in its process and any thread may call it. A loop of
+    /// many short parallel stages runs faster there (a stage started from
+    /// outside the pool wakes a worker and sleeps until the stage ends).
+    /// Ranks that share one pool must not: a rank blocked in a collective
+    /// would hold a worker that its partners may need. `false` unless an
+    /// implementation knows better.
+    fn may_drive_from_pool(&self) -> bool {
+        false
+    }
+
     /// Replaces `buf[i]`, on every rank, by the reduction over all ranks of
     /// their `buf[i]`. All ranks must pass slices of the same length.
     ///

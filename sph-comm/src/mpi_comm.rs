@@ -210,6 +210,12 @@ impl Communicator for MpiComm {
         self.lock().comm.barrier();
     }
 
+    /// One rank per process; any thread may call it unless MPI gave only
+    /// `MPI_THREAD_FUNNELED`.
+    fn may_drive_from_pool(&self) -> bool {
+        self.level != ThreadLevel::Funneled
+    }
+
     fn all_reduce<T: Reducible>(&self, buf: &mut [T], op: ReduceOp) {
         if buf.is_empty() {
             return;

@@ -33,6 +33,10 @@ impl Communicator for SerialComm {
 
     fn barrier(&self) {}
 
+    fn may_drive_from_pool(&self) -> bool {
+        true
+    }
+
     fn all_reduce<T: Reducible>(&self, _buf: &mut [T], _op: ReduceOp) {}
 
     fn sparse_exchange<T: Plain, S: AsRef<[T]>>(

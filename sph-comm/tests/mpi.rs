@@ -141,6 +141,11 @@ fn child(expected_size: usize) {
         Err(CommError::AlreadyInitialized)
     ));
     let (rank, size) = (comm.rank(), comm.size());
+    // One rank per process: the pool may drive it unless MPI is funneled.
+    assert_eq!(
+        comm.may_drive_from_pool(),
+        comm.thread_level() != sph_comm::ThreadLevel::Funneled
+    );
     assert_eq!(size, expected_size, "communicator size");
     assert!(rank < size);
 

@@ -773,3 +773,11 @@ proptest! {
         }
     }
 }
+
+/// In-process ranks share one rayon pool, so none may be driven from it; a
+/// serial rank is alone in its process and may.
+#[test]
+fn only_ranks_alone_in_their_process_drive_from_the_pool() {
+    on_all_sizes(|comm| assert!(!comm.may_drive_from_pool()));
+    assert!(SerialComm::new().may_drive_from_pool());
+}

@@ -155,7 +155,6 @@ impl Targets<'_> {
     }
 }
 
-
 /// Parameters of the tree evaluation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GravityParams {
