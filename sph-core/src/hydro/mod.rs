@@ -315,12 +315,15 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         clock.lap(Stage::Stirring);
         self.add_gravity(p, bbox, owned.clone(), Targets::ALL, step)?;
         // The largest |a| / eps (0 without gravity: the acceleration
-        // criterion is off).
+        // criterion is off, and no pass over the particles).
         let criterion = self.acc_criterion();
-        let acc_max = owned
-            .clone()
-            .map(|i| criterion.at(p, i))
-            .fold(0.0, f64::max);
+        let acc_max = match self.gravity {
+            Some(_) => owned
+                .clone()
+                .map(|i| criterion.at(p, i))
+                .fold(0.0, f64::max),
+            None => 0.0,
+        };
         clock.lap(Stage::Gravity);
 
         // One global sum: conserved quantities, neighbour and domain totals,
