@@ -102,7 +102,10 @@ pub struct Summary {
     pub momentum_rel_drift: f64,
     /// |L_end - L_0| / |L_0| (or over sum m |x||v| when L_0 ~ 0).
     pub angular_momentum_rel_drift: f64,
-    /// Measured shock radius (densest radial bin), blast cases.
+    /// Measured shock radius, blast cases: Sedov's the radius of the
+    /// similarity solution closest to the particles' density
+    /// ([`analysis::similarity_radius`]), Noh's where the binned density
+    /// passes half-way to the shocked gas; a shock tube's shock position.
     pub shock_radius: Option<f64>,
     /// Reference shock radius.
     pub shock_radius_ref: Option<f64>,
@@ -754,7 +757,7 @@ impl<C: Communicator> Simulation<C> {
         let bins = analysis::radial_profile(p, owned.clone(), comm, reference, t, r_max, 100);
         let (shock_radius, shock_radius_ref, plateau, plateau_ref) = match reference {
             Some(Reference::Sedov(s)) => (
-                Some(analysis::peak_radius(&bins)),
+                Some(analysis::similarity_radius(p, owned.clone(), comm, s, t)),
                 Some(s.shock_radius(t)),
                 None,
                 None,

@@ -5,7 +5,7 @@
 mod common;
 
 use common::{assert_mentions, refused, s, scratch, sphexa, sphexa_command};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 #[test]
 fn unknown_case_is_named_with_the_registered_cases() {
@@ -243,9 +243,12 @@ fn tiny_sedov(name: &str, extra: &[&str]) -> String {
 #[test]
 fn a_scheme_preset_is_its_options() {
     let preset = tiny_sedov("preset-noh", &["--scheme", "noh"]);
+    // `noh` is `paper` (Sedov's scheme until 2026-12-06) with these.
     let options = tiny_sedov(
         "options-noh",
         &[
+            "--scheme",
+            "paper",
             "--gradients",
             "kernel",
             "--av-switches",
@@ -376,14 +379,31 @@ fn first_step_criteria_skips_the_growth_from_dt0() {
     assert!(free[1] <= 1.1 * free[0] * (1.0 + 1e-15), "{free:?}");
 }
 
-/// `sphexa spectrum` on a driven run's snapshot gives the spectrum the run
-/// itself wrote at that step (`--spectra-every-time`) to the byte, and the
-/// width of ln rho the run's curve recorded (both exact sums); a missing
-/// file is named.
+/// `sphexa spectrum` on a driven run's snapshot gives the spectrum and
+/// ln rho PDF the run itself wrote at that time (`--spectra-every-time`)
+/// to the byte, under block steps (the default: both hold the state at the
+/// requested time) and global steps; there it also gives the width of ln
+/// rho the run's curve recorded at that step (both exact sums; a block
+/// run's curve row holds the state at the sub-step's end). A missing file
+/// is named.
 #[test]
 fn spectrum_of_a_snapshot() {
     let dir = scratch("spectrum");
-    let out = dir.join("run");
+    for time_steps in ["block", "global"] {
+        spectrum_matches_the_run(&dir, time_steps);
+    }
+
+    // A file that is not there is named.
+    let missing = dir.join("missing.h5");
+    let o = sphexa(&["spectrum", s(&missing)]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("missing.h5"));
+}
+
+/// One turbulence run under `time_steps` with snapshots and spectra at
+/// t = 0.05 and 0.1, each snapshot's spectrum against the run's.
+fn spectrum_matches_the_run(dir: &Path, time_steps: &str) {
+    let out = dir.join(format!("run-{time_steps}"));
     let o = sphexa(&[
         "run",
         "turbulence",
@@ -391,6 +411,8 @@ fn spectrum_of_a_snapshot() {
         "12",
         "--end-time",
         "0.1",
+        "--time-steps",
+        time_steps,
         "--snapshot-every-time",
         "0.05",
         "--spectra-every-time",
@@ -412,7 +434,7 @@ fn spectrum_of_a_snapshot() {
     for snap in snaps {
         let name = snap.file_stem().unwrap().to_string_lossy().to_string();
         let step: u64 = name.trim_start_matches("snapshot_").parse().unwrap();
-        let spec = dir.join(format!("spectrum-{step}"));
+        let spec = dir.join(format!("spectrum-{time_steps}-{step}"));
         let o = sphexa(&["spectrum", s(&snap), "--out", s(&spec)]);
         let text = String::from_utf8_lossy(&o.stdout).to_string();
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -420,9 +442,18 @@ fn spectrum_of_a_snapshot() {
         let run = std::fs::read(out.join(format!("spectra/spectrum_{step:08}.csv"))).unwrap();
         assert!(
             mine == run,
-            "step {step}: the run's spectrum differs from the snapshot's"
+            "{time_steps}, step {step}: the run's spectrum differs from the snapshot's"
         );
         assert!(String::from_utf8_lossy(&mine).starts_with("k,E,E_sol,E_comp,cells"));
+        let pdf = std::fs::read(spec.join("lnrho_pdf.csv")).unwrap();
+        let run_pdf = std::fs::read(out.join(format!("spectra/lnrho_{step:08}.csv"))).unwrap();
+        assert!(
+            pdf == run_pdf,
+            "{time_steps}, step {step}: the run's ln rho PDF differs from the snapshot's"
+        );
+        if time_steps == "block" {
+            continue;
+        }
         let width: f64 = text
             .split("width ")
             .nth(1)
@@ -446,12 +477,6 @@ fn spectrum_of_a_snapshot() {
             row[3]
         );
     }
-
-    // A file that is not there is named.
-    let missing = dir.join("missing.h5");
-    let o = sphexa(&["spectrum", s(&missing)]);
-    assert!(!o.status.success());
-    assert!(String::from_utf8_lossy(&o.stderr).contains("missing.h5"));
 }
 
 /// Block time steps: `timings.csv` has a row per synchronisation step
@@ -677,11 +702,11 @@ fn a_block_step_snapshot_lands_at_the_requested_time() {
 }
 
 /// Block time steps are each case's default, named in `config.toml`,
-/// with driving turned on too; driven turbulence steps globally unless
-/// asked for block steps, as a run that asks for global steps does; under
-/// block steps `--steps N` stops at the case's end time at the latest.
+/// with driving turned on too and for driven turbulence; a run that asks
+/// for global steps steps globally; under block steps `--steps N` stops
+/// at the case's end time at the latest.
 #[test]
-fn cases_run_block_time_steps_but_driven_turbulence() {
+fn cases_run_block_time_steps() {
     let run_case = |case: &str, name: &str, extra: &[&str]| -> (String, serde_json::Value) {
         let dir = scratch(name);
         let mut args = vec![case, "-n", "8", "-q", "--out", s(&dir)];
@@ -702,14 +727,14 @@ fn cases_run_block_time_steps_but_driven_turbulence() {
     let (stirred, _) = run("default-stirred", &["--steps", "2", "--stir", "on"]);
     assert_eq!(stirred, r#"time-steps = "block""#);
     let turbulence = |name: &str, extra: &[&str]| run_case("turbulence", name, extra);
-    let (driven, _) = turbulence("turbulence-default", &["--steps", "2"]);
-    assert_eq!(driven, r#"time-steps = "global""#);
-    let (driven, s) = turbulence(
-        "turbulence-block",
-        &["--steps", "4", "--time-steps", "block"],
-    );
+    let (driven, s) = turbulence("turbulence-default", &["--steps", "4"]);
     assert_eq!(driven, r#"time-steps = "block""#);
     assert_eq!(s["steps"].as_u64(), Some(4), "{s}");
+    let (driven, _) = turbulence(
+        "turbulence-global",
+        &["--steps", "2", "--time-steps", "global"],
+    );
+    assert_eq!(driven, r#"time-steps = "global""#);
     let (asked, _) = run("asked-global", &["--steps", "2", "--time-steps", "global"]);
     assert_eq!(asked, r#"time-steps = "global""#);
     // The case's end time, 0.05, comes first.

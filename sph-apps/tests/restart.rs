@@ -328,7 +328,7 @@ fn a_run_repeats_from_its_config_and_the_command_line_overrides_the_file() {
     std::fs::write(
         &file,
         format!(
-            "case = \"sedov\"\nside = 8\nsteps = 5\ntime-steps = \"global\"\nalpha = 0.5\nav-switches = \"on\"\nquiet = true\nsnapshot-at = [0.0]\nout = \"{}\"\n",
+            "case = \"sedov\"\nside = 8\nsteps = 5\ntime-steps = \"global\"\nalpha = 0.7\nav-switches = \"on\"\nquiet = true\nsnapshot-at = [0.0]\nout = \"{}\"\n",
             s(&dir.join("never"))
         ),
     )
@@ -345,7 +345,7 @@ fn a_run_repeats_from_its_config_and_the_command_line_overrides_the_file() {
     let resolved = std::fs::read_to_string(first.join("config.toml")).unwrap();
     for line in [
         "steps = 3",
-        "alpha = 0.5",
+        "alpha = 0.7",
         "av-switches = \"on\"",
         "side = 8",
         "case = \"sedov\"",
@@ -425,8 +425,11 @@ fn bad_configuration_files_are_named_with_what_is_allowed() {
         "1",
     ]);
     assert!(e.contains("'density'") && e.contains("rho"), "{e}");
+    // The paper's scheme has no per-particle alpha.
     let e = refused(&[
         "sedov",
+        "--scheme",
+        "paper",
         "-n",
         "8",
         "--steps",

@@ -34,7 +34,13 @@ fn quick_suite_passes(extra: &[&str]) {
     assert!(all.len() >= 15, "{} scenarios", all.len());
     for s in all {
         assert_eq!(s["pass"], true, "{s}");
-        assert!(!s["figures"].as_object().unwrap().is_empty(), "{s}");
+        // A run refused at its start (a massless particle under volume
+        // elements) has nothing to measure.
+        let stopped = s["note"].as_str().unwrap().starts_with("stopped:");
+        assert!(
+            stopped || !s["figures"].as_object().unwrap().is_empty(),
+            "{s}"
+        );
     }
     // The table lists every scenario.
     for s in all {

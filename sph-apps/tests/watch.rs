@@ -66,17 +66,36 @@ fn sedov_file(dir: &Path, row: usize, m: f64, u: f64) -> PathBuf {
     file
 }
 
-/// A zero-mass particle: warned about and recorded (step 0, its id and
-/// position) without --strict; an error naming it with --strict.
+/// A zero-mass particle under `m / rho` volumes (the paper's scheme):
+/// warned about and recorded (step 0, its id and position) without
+/// --strict; an error naming it with --strict. Sedov's own scheme
+/// (generalised volume elements, `X = m / rho0`) refuses it by id.
 #[test]
 fn a_zero_mass_particle_is_named() {
     let dir = scratch("zero-mass");
     let file = sedov_file(&dir, 137, 0.0, 1e-8);
+    let refused = dir.join("refused");
+    let o = sphexa(&[
+        "run",
+        "sedov",
+        "--init",
+        s(&file),
+        "--steps",
+        "2",
+        "-q",
+        "--out",
+        s(&refused),
+    ]);
+    let e = stderr(&o);
+    assert!(!o.status.success(), "volume elements took a zero mass: {e}");
+    assert!(e.contains("m > 0") && e.contains("id 137"), "{e}");
     let lax = dir.join("lax");
     let args = |out: &Path| {
         vec![
             "run".to_string(),
             "sedov".into(),
+            "--scheme".into(),
+            "paper".into(),
             "--init".into(),
             s(&file).into(),
             "--steps".into(),

@@ -38,7 +38,8 @@ const SIZES: [(&str, usize, u64); 13] = [
     // Its box is 0.25 across: 32 per unit length gives the kernel room.
     ("wind-shock", 32, 20),
     ("sedov-ve", 24, 20),
-    // Block time steps: 30 sub-steps over bins 45-49 of a line to 0.05.
+    // Block time steps (the paper's scheme): 30 sub-steps over bins 45-49
+    // of a line to 0.05.
     ("sedov-block", 24, 30),
     // Block steps with switches, volume elements and conduction (best).
     ("sedov-best-block", 24, 30),
@@ -128,6 +129,7 @@ fn scene(case: &str) -> Scene {
     if case == "drift" {
         // Uniform warm gas moving as a whole through the periodic box.
         let mut s = sph_validation::scene("sedov", side);
+        s.config.scheme = sph_core::Scheme::PAPER;
         let p = &mut s.particles;
         for i in 0..p.len() {
             (p.vx[i], p.vy[i], p.vz[i]) = (3.0, -2.0, 1.0);
@@ -139,9 +141,11 @@ fn scene(case: &str) -> Scene {
     }
     if case == "sedov-block" || case == "sedov-best-block" {
         let mut s = sph_validation::scene("sedov", side);
-        if case == "sedov-best-block" {
-            s.config.scheme = sph_core::Scheme::BEST;
-        }
+        s.config.scheme = if case == "sedov-best-block" {
+            sph_core::Scheme::BEST
+        } else {
+            sph_core::Scheme::PAPER
+        };
         s.config.time_steps = sph_core::TimeSteps::Block;
         s.config.timestep.first_step = sph_core::timestep::FirstStep::Criteria;
         return s;

@@ -127,18 +127,13 @@ pub trait Case: Sync + std::fmt::Debug {
     fn default_scheme(&self) -> Scheme;
 
     /// How the case's particles share time steps unless `--time-steps`
-    /// says otherwise: block steps, or one global step where the case
-    /// stirs. Block steps cover driving, but a stirred box's particles all
-    /// need about the same step: driven turbulence at 16^3 does 8% fewer
-    /// updates under them in 40% more sub-steps, in 1.00-1.03x the global
-    /// run's wall time (1.07-1.14x before the loop ran on rayon's pool),
-    /// and conserves momentum to 1e-4 of M v rather than to round-off.
+    /// says otherwise: block steps for every case. A stirred box's
+    /// particles all need about the same step: driven turbulence at 16^3
+    /// does 8% fewer updates under them in 40% more sub-steps, in 1.00-1.03x
+    /// the global run's wall time, and conserves momentum to 1e-4 of M v
+    /// rather than to round-off (`--time-steps global` keeps it there).
     fn default_time_steps(&self) -> TimeSteps {
-        if self.physics().stirring.is_some() {
-            TimeSteps::Global
-        } else {
-            TimeSteps::Block
-        }
+        TimeSteps::Block
     }
 
     /// The equation of state and self-gravity of the case (default: an

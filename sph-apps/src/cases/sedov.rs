@@ -32,9 +32,9 @@ impl Case for SedovBlast {
         }
     }
 
-    /// The paper's scheme.
+    /// `best`: the lowest L1 of rho, P and |v| per second of the presets.
     fn default_scheme(&self) -> Scheme {
-        Scheme::PAPER
+        Scheme::BEST
     }
 
 

@@ -203,10 +203,7 @@ impl<C: Communicator> StepObserver<C> for FileOutputs {
             // Block time steps: a snapshot asked for at a time holds the
             // state at that time, predicted back within the sub-step just
             // taken; a global run writes the state after the step.
-            let at = state
-                .block
-                .zip(time_due)
-                .map(|(b, t_out)| (b, t_out.clamp(view.report.t, t)));
+            let at = view.output_time(time_due);
             let t_snap = at.map_or(t, |(_, t_out)| t_out);
             let fixed_h = files.fixed_h;
             let field = |name: &str| -> Result<FieldData, AppError> {

@@ -8,8 +8,10 @@
 
 use super::totals::StageTotals;
 use crate::AppError;
-use sph_core::{Particles, RunState, StepReport};
+use sph_core::hydro::predict_field;
+use sph_core::{BlockRun, Particles, RunState, StepReport};
 use sph_tree::BoundingBox;
+use std::borrow::Cow;
 use std::ops::Range;
 
 /// What the observers see after a step (the same on every rank but the
@@ -34,6 +36,43 @@ pub struct StepView<'a, C> {
     pub total: usize,
     /// The driving state after the step (stirred runs).
     pub stirring: Option<&'a sph_core::stirring::Stirring>,
+}
+
+impl<C> StepView<'_, C> {
+    /// Where an output due at the requested time `t_due` (which this step
+    /// reached) is taken under block time steps: the run's time line and
+    /// that time, no earlier than the sub-step's start. `None` for a
+    /// global run or an output not due at a time: the state after the step.
+    pub fn output_time(&self, t_due: Option<f64>) -> Option<(BlockRun, f64)> {
+        self.state
+            .block
+            .zip(t_due)
+            .map(|(b, t_out)| (b, t_out.clamp(self.report.t, self.state.t)))
+    }
+
+    /// The owned particles' `values` of the field `name` at `at` (from
+    /// [`Self::output_time`]): predicted back within the sub-step for the
+    /// fields [`sph_core::hydro::PREDICTED`] names, as they are otherwise.
+    ///
+    /// # Errors
+    /// A state that cannot be predicted ([`predict_field`]).
+    pub fn owned_at<'v>(
+        &self,
+        name: &str,
+        values: &'v [f64],
+        at: Option<(BlockRun, f64)>,
+    ) -> Result<Cow<'v, [f64]>, AppError> {
+        let own = &values[self.owned.clone()];
+        match at {
+            None => Ok(Cow::Borrowed(own)),
+            Some((b, t_out)) => {
+                let mut v = own.to_vec();
+                let (p, r) = (self.particles, self.owned.clone());
+                predict_field(p, r, self.bbox, &b, self.state.t, t_out, name, &mut v)?;
+                Ok(Cow::Owned(v))
+            }
+        }
+    }
 }
 
 /// What an observer made of a step.

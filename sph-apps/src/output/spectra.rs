@@ -14,9 +14,7 @@ use crate::spectrum::{
 };
 use crate::AppError;
 use sph_comm::{Communicator, ExactSum, ReduceOp};
-use sph_core::Particles;
 use sph_tree::BoundingBox;
-use std::ops::Range;
 use std::path::PathBuf;
 
 /// The spectra of a run, on their schedule.
@@ -43,16 +41,36 @@ impl SpectraObserver {
     }
 }
 
-/// The spectrum (rank 0 only: `None` elsewhere) and the PDF of the owned
-/// particles of every rank, on a grid of `n_grid` cells per side over the
+/// The values a spectrum reads, one per particle of this rank's share.
+#[derive(Debug, Clone, Copy)]
+pub struct SpectrumInput<'a> {
+    /// Positions.
+    pub x: &'a [f64],
+    /// Positions.
+    pub y: &'a [f64],
+    /// Positions.
+    pub z: &'a [f64],
+    /// Masses.
+    pub m: &'a [f64],
+    /// Velocities.
+    pub vx: &'a [f64],
+    /// Velocities.
+    pub vy: &'a [f64],
+    /// Velocities.
+    pub vz: &'a [f64],
+    /// Densities.
+    pub rho: &'a [f64],
+}
+
+/// The spectrum (rank 0 only: `None` elsewhere) and the PDF of every
+/// rank's `input` particles, on a grid of `n_grid` cells per side over the
 /// periodic cube `bbox`. Collective.
 ///
 /// # Errors
 /// A box that is not a periodic cube, or particle values the spectrum
 /// refuses (non-finite, negative mass or density).
 pub fn measure<C: Communicator>(
-    p: &Particles,
-    owned: Range<usize>,
+    input: &SpectrumInput<'_>,
     bbox: &BoundingBox,
     total: usize,
     n_grid: usize,
@@ -71,13 +89,16 @@ pub fn measure<C: Communicator>(
             [0, 1, 2].map(|d| bbox.is_periodic(d))
         )));
     }
-    let r = owned;
-    let (m, vx, vy, vz) = (
-        &p.m[r.clone()],
-        &p.vx[r.clone()],
-        &p.vy[r.clone()],
-        &p.vz[r.clone()],
-    );
+    let SpectrumInput {
+        x,
+        y,
+        z,
+        m,
+        vx,
+        vy,
+        vz,
+        rho,
+    } = *input;
     let failed = |e: SpectrumError| AppError::Usage(format!("spectra: {e}"));
     let local = agree(Extremes::local(m, vx, vy, vz), comm)?;
     let mut ext = [local.mass, local.momentum];
@@ -88,20 +109,12 @@ pub fn measure<C: Communicator>(
     };
     let scale = DepositScale::new(extremes, total as u64).map_err(failed)?;
     let mut grid = SpectrumGrid::new(n_grid, lo, length, scale).map_err(failed)?;
-    let deposited = grid.deposit(
-        &p.x[r.clone()],
-        &p.y[r.clone()],
-        &p.z[r.clone()],
-        m,
-        vx,
-        vy,
-        vz,
-    );
+    let deposited = grid.deposit(x, y, z, m, vx, vy, vz);
     agree(deposited, comm)?;
     comm.all_reduce(grid.integers_mut(), ReduceOp::Sum);
     let rho_bar = grid.total_mass() / length.powi(3);
     let mut pdf = LnRhoPdf::new();
-    agree(pdf.add(m, &p.rho[r], rho_bar), comm)?;
+    agree(pdf.add(m, rho, rho_bar), comm)?;
     ExactSum::all_reduce_many(pdf.sums_mut(), comm);
     let spectrum = if comm.rank() == 0 {
         Some(velocity_spectrum(&grid, true).map_err(failed)?)
@@ -128,12 +141,33 @@ fn agree<T, C: Communicator>(local: Result<T, SpectrumError>, comm: &C) -> Resul
 impl<C: Communicator> StepObserver<C> for SpectraObserver {
     fn step(&mut self, view: &StepView<'_, C>) -> Result<Observed, AppError> {
         let state = view.state;
+        let time_due = self.schedule.time_due(state.t);
         if !self.schedule.due(state.step, state.t) {
             return Ok(Observed::Recorded);
         }
+        // Block time steps: the state at the requested time, as a
+        // snapshot due then holds it.
+        let at = view.output_time(time_due);
+        let p = view.particles;
+        let x = view.owned_at("x", &p.x, at)?;
+        let y = view.owned_at("y", &p.y, at)?;
+        let z = view.owned_at("z", &p.z, at)?;
+        let vx = view.owned_at("vx", &p.vx, at)?;
+        let vy = view.owned_at("vy", &p.vy, at)?;
+        let vz = view.owned_at("vz", &p.vz, at)?;
+        let rho = view.owned_at("rho", &p.rho, at)?;
+        let input = SpectrumInput {
+            x: &x,
+            y: &y,
+            z: &z,
+            m: &p.m[view.owned.clone()],
+            vx: &vx,
+            vy: &vy,
+            vz: &vz,
+            rho: &rho,
+        };
         let (spectrum, pdf) = measure(
-            view.particles,
-            view.owned.clone(),
+            &input,
             view.bbox,
             view.total,
             default_grid(view.total),

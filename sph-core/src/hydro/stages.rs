@@ -496,20 +496,31 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             for ((x, m), u) in self.buf.xm.iter_mut().zip(&p.m).zip(&p.u) {
                 *x = m * u;
             }
-            if let Some(i) = self
-                .buf
-                .xm
-                .iter()
-                .position(|&x| !(x > 0.0 && x.is_finite()))
-            {
-                return Err(CoreError::Invalid(format!(
-                    "pressure-energy volumes need m u > 0: particle {} has m = {}, u = {} (use --volume mass or ve for cold gas)",
-                    p.id[i], p.m[i], p.u[i]
-                )));
-            }
         } else {
             xmass(&self.kernel, bbox, pos, &self.list, &mut self.buf.xm);
             self.domain.exchange(&mut [self.buf.xm.as_mut_slice()])?;
+        }
+        // A volume element of 0 (a massless particle, or cold gas under
+        // pressure-energy volumes) would make its density 0 / 0.
+        if let Some(i) = self
+            .buf
+            .xm
+            .iter()
+            .position(|&x| !(x > 0.0 && x.is_finite()))
+        {
+            return Err(CoreError::Invalid(
+                if self.config.scheme.volume == Volume::PressureEnergy {
+                    format!(
+                        "pressure-energy volumes need m u > 0: particle id {} has m = {}, u = {} (use --volume mass or ve for cold gas)",
+                        p.id[i], p.m[i], p.u[i]
+                    )
+                } else {
+                    format!(
+                        "generalised volume elements need m > 0: particle id {} has m = {} (use --volume mass for massless particles)",
+                        p.id[i], p.m[i]
+                    )
+                },
+            ));
         }
         let out = VeOut {
             kx: &mut self.buf.kx,

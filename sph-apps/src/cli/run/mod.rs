@@ -144,8 +144,7 @@ fn user_scene(
 }
 
 /// The time steps of a run that does not name them: the case's (block
-/// steps, global for driven turbulence, whose particles all need about
-/// the same step), or global where a scene of the user's own stops after
+/// steps), or global where a scene of the user's own stops after
 /// `--steps` alone (block steps need an end time for their time line).
 fn default_time_steps(a: &RunArgs, case: &dyn cases::Case, user_scene: bool) -> TimeSteps {
     if user_scene && a.end_time.is_none() {
