@@ -41,7 +41,8 @@ const SIZES: [(&str, usize, u64); 13] = [
     // Block time steps (the paper's scheme): 30 sub-steps over bins 45-49
     // of a line to 0.05.
     ("sedov-block", 24, 30),
-    // Block steps with switches, volume elements and conduction (best).
+    // Block steps with switches, volume elements and conduction (best,
+    // Sedov's own scheme).
     ("sedov-best-block", 24, 30),
     // Block steps with self-gravity: 30 sub-steps of a line to t = 1.
     ("evrard-block", 16, 30),
@@ -121,6 +122,14 @@ fn main() {
     }
 }
 
+/// `scheme` in place of Sedov's own (`best`).
+fn preset(scheme: sph_core::Scheme) -> cases::SchemeOverrides {
+    cases::SchemeOverrides {
+        preset: Some(scheme),
+        ..Default::default()
+    }
+}
+
 fn scene(case: &str) -> Scene {
     let (_, side, _) = runs()
         .into_iter()
@@ -128,8 +137,7 @@ fn scene(case: &str) -> Scene {
         .expect("known case");
     if case == "drift" {
         // Uniform warm gas moving as a whole through the periodic box.
-        let mut s = sph_validation::scene("sedov", side);
-        s.config.scheme = sph_core::Scheme::PAPER;
+        let mut s = sph_validation::scene_with("sedov", side, &preset(sph_core::Scheme::PAPER));
         let p = &mut s.particles;
         for i in 0..p.len() {
             (p.vx[i], p.vy[i], p.vz[i]) = (3.0, -2.0, 1.0);
@@ -140,11 +148,10 @@ fn scene(case: &str) -> Scene {
         return s;
     }
     if case == "sedov-block" || case == "sedov-best-block" {
-        let mut s = sph_validation::scene("sedov", side);
-        s.config.scheme = if case == "sedov-best-block" {
-            sph_core::Scheme::BEST
+        let mut s = if case == "sedov-best-block" {
+            sph_validation::scene("sedov", side)
         } else {
-            sph_core::Scheme::PAPER
+            sph_validation::scene_with("sedov", side, &preset(sph_core::Scheme::PAPER))
         };
         s.config.time_steps = sph_core::TimeSteps::Block;
         s.config.timestep.first_step = sph_core::timestep::FirstStep::Criteria;
@@ -159,9 +166,7 @@ fn scene(case: &str) -> Scene {
         return s;
     }
     if case == "sedov-ve" {
-        let mut s = sph_validation::scene("sedov", side);
-        s.config.scheme = sph_core::Scheme::VE;
-        return s;
+        return sph_validation::scene_with("sedov", side, &preset(sph_core::Scheme::VE));
     }
     // Each case with its own scheme, applied by its set-up (noh: kernel
     // gradients and viscosity switches, whose halo refreshes of div v and
