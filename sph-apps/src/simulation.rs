@@ -921,7 +921,7 @@ struct EndState {
     bins: Vec<Bin>,
     /// L1 errors against the reference.
     l1: Option<L1>,
-    /// Densest bin's radius (Sedov).
+    /// The measured shock radius (Sedov: [`analysis::similarity_radius`]; Noh and tubes: where the density passes half-way).
     shock_radius: Option<f64>,
     /// Reference shock radius.
     shock_radius_ref: Option<f64>,
