@@ -36,6 +36,7 @@
 use super::report::{DomainStepStats, Stage, StageClock};
 use super::{grow_open_axes, BlockRun, Hydro, StepReport};
 use crate::conserved::Conserved;
+use crate::fields::Needs;
 use crate::pair_loop::{neighbour_lanes, F64s, Group, PairLoop, PairStage};
 use crate::timeline::{is_active, step_begin, Bin, Ticks, TimeLine, LINE, MAX_BIN};
 use crate::timestep::{DtLimit, FirstStep, TimeSteps};
@@ -488,14 +489,23 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
     }
 
     /// Swaps the held fields of the table (`div_v`, `xm`, `kx`,
-    /// `alpha_eff`, the velocity gradients, where the scheme has them)
-    /// with the step buffers the stages use.
+    /// `alpha_eff`, the velocity gradients, where the scheme holds them)
+    /// with the step buffers the stages use. A buffer whose field is not
+    /// held stays with the stages: AV cleaning or the Balsara limiter
+    /// with one constant alpha computes `div v` without holding it.
     fn swap_held_buffers(&mut self, p: &mut Particles) {
-        std::mem::swap(&mut self.buf.div_v, &mut p.div_v);
-        std::mem::swap(&mut self.buf.xm, &mut p.xm);
-        std::mem::swap(&mut self.buf.kx, &mut p.kx);
-        std::mem::swap(&mut self.buf.alpha_eff, &mut p.alpha_eff);
-        if p.fields().cleaning {
+        let f = p.fields();
+        if f.holds(Needs::BlockSwitches) {
+            std::mem::swap(&mut self.buf.div_v, &mut p.div_v);
+        }
+        if f.holds(Needs::BlockVolumes) {
+            std::mem::swap(&mut self.buf.xm, &mut p.xm);
+            std::mem::swap(&mut self.buf.kx, &mut p.kx);
+        }
+        if f.holds(Needs::BlockBalsara) {
+            std::mem::swap(&mut self.buf.alpha_eff, &mut p.alpha_eff);
+        }
+        if f.holds(Needs::BlockCleaning) {
             self.buf.grad_v.resize_with(6, Vec::new);
             for (held, buffer) in p.grad_v.iter_mut().zip(&mut self.buf.grad_v) {
                 std::mem::swap(held, buffer);
