@@ -229,6 +229,9 @@ fn the_start_ramp_holds_a_blast_at_most_the_limiters_factor_down() {
     assert!(corner > centre + 2.0, "bins {centre} to {corner}");
 }
 
+/// A change to a preset.
+type Tweak = fn(&mut Scheme);
+
 /// Every preset, and each with its viscosity switched the other way, with
 /// AV cleaning and with the Balsara limiter, runs block steps on the
 /// blast with its energy kept. A scheme computes fields it does not hold
@@ -241,7 +244,7 @@ fn the_start_ramp_holds_a_blast_at_most_the_limiters_factor_down() {
 /// frozen run.
 #[test]
 fn every_preset_and_variant_runs_block_steps() {
-    let variants: [(&str, fn(&mut Scheme)); 4] = [
+    let variants: [(&str, Tweak); 4] = [
         ("as is", |_| {}),
         ("switches flipped", |s| {
             let on = s.switches().is_none();
