@@ -5,12 +5,12 @@
 
 use super::parse::{parse_count, parse_interval};
 use crate::checkpoint::split_spec;
-use crate::spectrum::{
-    default_grid, slope, velocity_spectrum, write_csv, write_pdf_csv, write_spectrum_csv,
-    DepositScale, Extremes, LnRhoPdf, SpectrumGrid,
-};
+use crate::output::spectra::{measure, SpectrumInput};
+use crate::spectrum::{default_grid, slope, write_csv, write_pdf_csv, write_spectrum_csv};
 use crate::AppError;
 use clap::Args;
+use sph_comm::SerialComm;
+use sph_tree::{Boundary, BoundingBox};
 use std::path::{Path, PathBuf};
 
 /// The options of `sphexa spectrum`.
@@ -49,8 +49,8 @@ pub(crate) fn spectrum(a: SpectrumArgs) -> Result<(), AppError> {
     let index = k.map_or(count.saturating_sub(1), |k| k as usize);
     let step = sph_io::foreign::read_foreign_rows(&path, index, &FIELDS, &[], 0..u64::MAX)?;
     let field = |n: &str| step.field(n).expect("a required field was read");
-    let (lo, length) = match (a.cube, step.bbox) {
-        (Some((lo, hi)), _) => (lo, hi - lo),
+    let (lo, hi) = match (a.cube, step.bbox) {
+        (Some(cube), _) => cube,
         (None, Some(b)) => {
             let length = b[1] - b[0];
             let cubic = (0..3).all(|d| {
@@ -63,7 +63,7 @@ pub(crate) fn spectrum(a: SpectrumArgs) -> Result<(), AppError> {
                     path.display()
                 )));
             }
-            (b[0], length)
+            (b[0], b[1])
         }
         (None, None) => {
             return Err(AppError::Usage(format!(
@@ -74,18 +74,24 @@ pub(crate) fn spectrum(a: SpectrumArgs) -> Result<(), AppError> {
     };
     let n = step.total as usize;
     let grid_n = a.grid.unwrap_or_else(|| default_grid(n));
-    let (m, vx, vy, vz) = (field("m"), field("vx"), field("vy"), field("vz"));
-    let spectral =
-        |e: crate::spectrum::SpectrumError| AppError::Usage(format!("{}: {e}", path.display()));
-    let scale = DepositScale::new(Extremes::local(m, vx, vy, vz).map_err(spectral)?, n as u64)
-        .map_err(spectral)?;
-    let mut grid = SpectrumGrid::new(grid_n, [lo; 3], length, scale).map_err(spectral)?;
-    grid.deposit(field("x"), field("y"), field("z"), m, vx, vy, vz)
-        .map_err(spectral)?;
-    let s = velocity_spectrum(&grid, !a.raw).map_err(spectral)?;
-    let mut pdf = LnRhoPdf::new();
-    let rho_bar = grid.total_mass() / length.powi(3);
-    pdf.add(m, field("rho"), rho_bar).map_err(spectral)?;
+    let named = |e: AppError| match e {
+        AppError::Usage(m) => AppError::Usage(format!("{}: {m}", path.display())),
+        e => e,
+    };
+    let cube = BoundingBox::cube(lo, hi, Boundary::Periodic)
+        .map_err(|e| AppError::Usage(format!("{}: the cube {lo}:{hi}: {e}", path.display())))?;
+    let input = SpectrumInput {
+        x: field("x"),
+        y: field("y"),
+        z: field("z"),
+        m: field("m"),
+        vx: field("vx"),
+        vy: field("vy"),
+        vz: field("vz"),
+        rho: field("rho"),
+    };
+    let (s, pdf) = measure(&input, &cube, n, grid_n, !a.raw, &SerialComm).map_err(named)?;
+    let s = s.expect("one rank: rank 0 holds the spectrum");
 
     let (dir, stem) = output_names(&path, index, a.out.as_deref());
     std::fs::create_dir_all(&dir).map_err(|e| AppError::io(&dir, e))?;

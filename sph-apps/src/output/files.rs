@@ -7,7 +7,6 @@ use super::snapshot::{self as snapfile, Schedule};
 use crate::{checkpoint, AppError};
 use serde::Serialize;
 use sph_comm::{Communicator, ReduceOp};
-use sph_core::hydro::predict_field;
 use sph_io::{Attr, FieldData, Snapshot};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -209,9 +208,9 @@ impl<C: Communicator> StepObserver<C> for FileOutputs {
             let field = |name: &str| -> Result<FieldData, AppError> {
                 let mut data =
                     snapfile::field(p, owned.clone(), name).expect("checked by set_outputs");
-                if let (Some((b, t_out)), FieldData::F64(v)) = (at, &mut data) {
+                if let FieldData::F64(v) = &mut data {
                     if !(name == "h" && fixed_h) {
-                        predict_field(p, owned.clone(), view.bbox, &b, t, t_out, name, v)?;
+                        view.predict_owned(name, v, at)?;
                     }
                 }
                 Ok(data)

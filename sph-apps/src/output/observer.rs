@@ -65,13 +65,32 @@ impl<C> StepView<'_, C> {
         let own = &values[self.owned.clone()];
         match at {
             None => Ok(Cow::Borrowed(own)),
-            Some((b, t_out)) => {
+            Some(_) => {
                 let mut v = own.to_vec();
-                let (p, r) = (self.particles, self.owned.clone());
-                predict_field(p, r, self.bbox, &b, self.state.t, t_out, name, &mut v)?;
+                self.predict_owned(name, &mut v, at)?;
                 Ok(Cow::Owned(v))
             }
         }
+    }
+
+    /// Moves `v`, the owned particles' values of the field `name` after
+    /// the step, to `at` (from [`Self::output_time`]) in place: the fields
+    /// [`sph_core::hydro::PREDICTED`] names are predicted back within the
+    /// sub-step, the others and every field of a global run stay.
+    ///
+    /// # Errors
+    /// A state that cannot be predicted ([`predict_field`]).
+    pub fn predict_owned(
+        &self,
+        name: &str,
+        v: &mut [f64],
+        at: Option<(BlockRun, f64)>,
+    ) -> Result<(), AppError> {
+        if let Some((b, t_out)) = at {
+            let (p, r) = (self.particles, self.owned.clone());
+            predict_field(p, r, self.bbox, &b, self.state.t, t_out, name, v)?;
+        }
+        Ok(())
     }
 }
 

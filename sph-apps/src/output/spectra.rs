@@ -64,7 +64,9 @@ pub struct SpectrumInput<'a> {
 
 /// The spectrum (rank 0 only: `None` elsewhere) and the PDF of every
 /// rank's `input` particles, on a grid of `n_grid` cells per side over the
-/// periodic cube `bbox`. Collective.
+/// periodic cube `bbox`, divided by the deposit's window where
+/// `deconvolve`. Collective: a run's spectra and `sphexa spectrum` (one
+/// rank) both measure here.
 ///
 /// # Errors
 /// A box that is not a periodic cube, or particle values the spectrum
@@ -74,6 +76,7 @@ pub fn measure<C: Communicator>(
     bbox: &BoundingBox,
     total: usize,
     n_grid: usize,
+    deconvolve: bool,
     comm: &C,
 ) -> Result<(Option<Spectrum>, LnRhoPdf), AppError> {
     let (lo, hi) = (bbox.lo(), bbox.hi());
@@ -117,7 +120,7 @@ pub fn measure<C: Communicator>(
     agree(pdf.add(m, rho, rho_bar), comm)?;
     ExactSum::all_reduce_many(pdf.sums_mut(), comm);
     let spectrum = if comm.rank() == 0 {
-        Some(velocity_spectrum(&grid, true).map_err(failed)?)
+        Some(velocity_spectrum(&grid, deconvolve).map_err(failed)?)
     } else {
         None
     };
@@ -171,6 +174,7 @@ impl<C: Communicator> StepObserver<C> for SpectraObserver {
             view.bbox,
             view.total,
             default_grid(view.total),
+            true,
             view.comm,
         )?;
         if let (Some(dir), Some(s)) = (&self.dir, spectrum) {
