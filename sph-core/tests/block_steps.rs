@@ -282,4 +282,3 @@ fn every_preset_and_variant_runs_block_steps() {
         }
     }
 }
-
