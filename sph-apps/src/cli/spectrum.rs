@@ -5,7 +5,7 @@
 
 use super::parse::{parse_count, parse_interval};
 use crate::checkpoint::split_spec;
-use crate::output::spectra::{measure, SpectrumInput};
+use crate::output::spectra::{measure, periodic_cube, SpectrumInput};
 use crate::spectrum::{default_grid, slope, write_csv, write_pdf_csv, write_spectrum_csv};
 use crate::AppError;
 use clap::Args;
@@ -49,37 +49,30 @@ pub(crate) fn spectrum(a: SpectrumArgs) -> Result<(), AppError> {
     let index = k.map_or(count.saturating_sub(1), |k| k as usize);
     let step = sph_io::foreign::read_foreign_rows(&path, index, &FIELDS, &[], 0..u64::MAX)?;
     let field = |n: &str| step.field(n).expect("a required field was read");
-    let (lo, hi) = match (a.cube, step.bbox) {
-        (Some(cube), _) => cube,
+    let in_file = |e: String| AppError::Usage(format!("{}: {e}", path.display()));
+    let cube = match (a.cube, step.bbox) {
+        (Some((lo, hi)), _) => BoundingBox::cube(lo, hi, Boundary::Periodic)
+            .map_err(|e| in_file(format!("--box {lo}:{hi}: {e}")))?,
         (None, Some(b)) => {
-            let length = b[1] - b[0];
-            let cubic = (0..3).all(|d| {
-                (b[2 * d] - b[0]).abs() <= 1e-12 * length
-                    && (b[2 * d + 1] - b[2 * d] - length).abs() <= 1e-12 * length
-            });
-            if !cubic {
-                return Err(AppError::Usage(format!(
-                    "{}: its box {b:?} is not a cube; a spectrum needs a periodic cube (give --box LO:HI to use one)",
-                    path.display()
-                )));
-            }
-            (b[0], b[1])
+            let periodic = [Boundary::Periodic; 3];
+            let cube = BoundingBox::new([b[0], b[2], b[4]], [b[1], b[3], b[5]], periodic)
+                .map_err(|e| in_file(format!("its box {b:?}: {e}")))?;
+            periodic_cube(&cube)
+                .map_err(|e| in_file(format!("{e}; give --box LO:HI to use one")))?;
+            cube
         }
         (None, None) => {
-            return Err(AppError::Usage(format!(
-                "{}: Step#{index} has no box attribute; give the periodic cube with --box LO:HI",
-                path.display()
+            return Err(in_file(format!(
+                "Step#{index} has no box attribute; give the periodic cube with --box LO:HI"
             )))
         }
     };
     let n = step.total as usize;
     let grid_n = a.grid.unwrap_or_else(|| default_grid(n));
     let named = |e: AppError| match e {
-        AppError::Usage(m) => AppError::Usage(format!("{}: {m}", path.display())),
+        AppError::Usage(m) => in_file(m),
         e => e,
     };
-    let cube = BoundingBox::cube(lo, hi, Boundary::Periodic)
-        .map_err(|e| AppError::Usage(format!("{}: the cube {lo}:{hi}: {e}", path.display())))?;
     let input = SpectrumInput {
         x: field("x"),
         y: field("y"),

@@ -79,19 +79,7 @@ pub fn measure<C: Communicator>(
     deconvolve: bool,
     comm: &C,
 ) -> Result<(Option<Spectrum>, LnRhoPdf), AppError> {
-    let (lo, hi) = (bbox.lo(), bbox.hi());
-    let length = hi[0] - lo[0];
-    let cube = (0..3).all(|d| {
-        bbox.is_periodic(d)
-            && (lo[d] - lo[0]).abs() <= 1e-12 * length
-            && (hi[d] - lo[d] - length).abs() <= 1e-12 * length
-    });
-    if !cube {
-        return Err(AppError::Usage(format!(
-            "spectra need a periodic cube; this run's box is {lo:?} to {hi:?} (periodic: {:?})",
-            [0, 1, 2].map(|d| bbox.is_periodic(d))
-        )));
-    }
+    let (lo, length) = periodic_cube(bbox).map_err(AppError::Usage)?;
     let SpectrumInput {
         x,
         y,
@@ -125,6 +113,29 @@ pub fn measure<C: Communicator>(
         None
     };
     Ok((spectrum, pdf))
+}
+
+/// The corner and side of `bbox` if it is a periodic cube (sides equal
+/// to 1e-12), else what it is instead.
+///
+/// # Errors
+/// The box, when it is not a periodic cube.
+pub fn periodic_cube(bbox: &BoundingBox) -> Result<([f64; 3], f64), String> {
+    let (lo, hi) = (bbox.lo(), bbox.hi());
+    let length = hi[0] - lo[0];
+    let cube = (0..3).all(|d| {
+        bbox.is_periodic(d)
+            && (lo[d] - lo[0]).abs() <= 1e-12 * length
+            && (hi[d] - lo[d] - length).abs() <= 1e-12 * length
+    });
+    if cube {
+        Ok((lo, length))
+    } else {
+        Err(format!(
+            "spectra need a periodic cube; the box is {lo:?} to {hi:?} (periodic: {:?})",
+            [0, 1, 2].map(|d| bbox.is_periodic(d))
+        ))
+    }
 }
 
 /// `local` if every rank's part succeeded, else an error on every rank
@@ -207,5 +218,24 @@ impl<C: Communicator> StepObserver<C> for SpectraObserver {
             ),
             _ => Ok(()),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::periodic_cube;
+    use sph_tree::{Boundary, BoundingBox};
+
+    #[test]
+    fn only_a_periodic_cube_is_one() {
+        let p = [Boundary::Periodic; 3];
+        let cube = BoundingBox::new([-0.5; 3], [0.5; 3], p).unwrap();
+        assert_eq!(periodic_cube(&cube), Ok(([-0.5; 3], 1.0)));
+        let slab = BoundingBox::new([-0.5; 3], [0.5, 0.5, 0.1], p).unwrap();
+        assert!(periodic_cube(&slab).unwrap_err().contains("periodic cube"));
+        let mut open = p;
+        open[2] = Boundary::Open;
+        let half_open = BoundingBox::new([-0.5; 3], [0.5; 3], open).unwrap();
+        assert!(periodic_cube(&half_open).is_err());
     }
 }
