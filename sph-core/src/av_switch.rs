@@ -130,6 +130,17 @@ pub struct AvSwitchParams {
     /// How `alpha` relaxes and which signal velocity sets the decay time.
     #[serde(default)]
     pub form: SwitchForm,
+    /// The ceiling at weak shocks, or `None` for `alpha_max` at every
+    /// shock. With it a particle's ceiling depends on the pair Mach
+    /// number `M_i = max_j max(-w_ij, 0) / ((c_i + c_j) / 2)` of its
+    /// fastest approaching neighbour ([`AvSwitchParams::ceiling`]): near
+    /// `weak_alpha` for weak shocks and slow compression, `alpha_max` for
+    /// strong shocks into cold gas. Weak shocks ring behind the front
+    /// unless alpha is about 1 there (Sod); strong ones overheat the
+    /// shocked gas with it (Noh), where the quadratic term carries the
+    /// jump (`docs/schemes.md`, 2026-12-06, one scheme).
+    #[serde(default)]
+    pub weak_alpha: Option<f64>,
 }
 
 /// How the switch relaxes `alpha` towards its target.
@@ -163,7 +174,15 @@ impl AvSwitchParams {
         decay: 0.2,
         sound_weight: 0.05,
         form: SwitchForm::Smooth,
+        weak_alpha: None,
     };
+
+    /// The pair Mach number at which the ceiling is half-way between
+    /// `weak_alpha` and `alpha_max`: pairs approaching at a quarter of
+    /// their summed sound speeds (Sod's shock is on the weak side; Noh's
+    /// and Sedov's, into cold gas, far on the strong side). Not tuned
+    /// beyond 0.5 and 1 (`docs/schemes.md`, 2026-12-06 evening).
+    pub const WEAK_MACH: f64 = 0.5;
 
     /// SPH-EXA's `hydro_ve` switch: its parameters and
     /// [`SwitchForm::SphExa`].
@@ -182,6 +201,35 @@ impl AvSwitchParams {
             && self.decay.is_finite()
             && self.sound_weight >= 0.0
             && self.sound_weight.is_finite()
+            && self.weak_alpha.is_none_or(|a| a >= 0.0 && a.is_finite())
+    }
+
+    /// The ceiling of `alpha` for a particle whose fastest approaching
+    /// neighbour has the pair Mach number `mach` (>= 0):
+    ///
+    /// ```text
+    /// ceiling = alpha_max + (weak_alpha - alpha_max) / (1 + (mach / WEAK_MACH)^2)
+    /// ```
+    ///
+    /// `alpha_max` without `weak_alpha`.
+    ///
+    /// ```
+    /// use sph_core::av_switch::AvSwitchParams;
+    /// let p = AvSwitchParams { alpha_max: 0.5, weak_alpha: Some(2.0), ..AvSwitchParams::DEFAULT };
+    /// assert_eq!(p.ceiling(0.0), 2.0);
+    /// assert_eq!(p.ceiling(AvSwitchParams::WEAK_MACH), 1.25);
+    /// assert!(p.ceiling(100.0) < 0.5001);
+    /// assert_eq!(AvSwitchParams::DEFAULT.ceiling(0.0), 1.0);
+    /// ```
+    #[inline]
+    pub fn ceiling(&self, mach: f64) -> f64 {
+        match self.weak_alpha {
+            None => self.alpha_max,
+            Some(weak) => {
+                let m = mach / Self::WEAK_MACH;
+                self.alpha_max + (weak - self.alpha_max) / (1.0 + m * m)
+            }
+        }
     }
 
     /// The local target of the switch from the shock indicator:
@@ -582,6 +630,8 @@ struct IndicatorSums {
     /// `sum_j V_j w_j (div_j - div_i) d`
     s: [F64s; 3],
     v_sig: F64s,
+    /// `max_j max(-w_ij, 0) / (c_i + c_j)`
+    approach: F64s,
 }
 
 impl<K: Kernel, const IAD: bool> Indicator<'_, K, IAD> {
@@ -602,6 +652,7 @@ impl<K: Kernel, const IAD: bool> Indicator<'_, K, IAD> {
             inv_h: 1.0 / hi,
             reach_i,
             s: [F64s::splat(0.0); 3],
+            approach: F64s::splat(0.0),
             v_sig: if self.params.form == SwitchForm::SphExa {
                 1e-40 * ci
             } else {
@@ -633,6 +684,11 @@ impl<K: Kernel, const IAD: bool> Indicator<'_, K, IAD> {
             let vs = t.ci + f.c[j] - 3.0 * w_ij.min(zero);
             t.v_sig = t.v_sig.max(vs * pair);
         }
+        if self.params.weak_alpha.is_some() {
+            // Cold pairs (c_i + c_j = 0) approaching: infinite Mach number.
+            let a = (-w_ij).max(zero) / (t.ci + f.c[j]).max(F64s::splat(f64::MIN_POSITIVE));
+            t.approach = t.approach.max(a * pair);
+        }
         let w = f.m[j] / f.rho[j]
             * pair_weight::<K, IAD>(f.kernel, r2, t.inv_h)
             * (self.div_v[j] - t.div_i)
@@ -642,9 +698,9 @@ impl<K: Kernel, const IAD: bool> Indicator<'_, K, IAD> {
         }
     }
 
-    /// `(alpha_loc, v_sig)` of the group's lanes.
+    /// `(alpha_loc, v_sig, ceiling)` of the group's lanes.
     #[inline(always)]
-    fn finish(&self, g: &Group, t: IndicatorSums) -> ([f64; LANES], [f64; LANES]) {
+    fn finish(&self, g: &Group, t: IndicatorSums) -> ([f64; LANES], [f64; LANES], [f64; LANES]) {
         let f = &self.flow;
         let k3 = f.norm * t.inv_h * t.inv_h * t.inv_h;
         let s = t.s;
@@ -661,8 +717,16 @@ impl<K: Kernel, const IAD: bool> Indicator<'_, K, IAD> {
             t.ci.to_array(),
             t.div_i.to_array(),
         );
-        let alpha_loc = std::array::from_fn(|l| self.params.local_alpha(dv[l], gd[l], h[l], c[l]));
-        (alpha_loc, t.v_sig.to_array())
+        let approach = t.approach.to_array();
+        let ceiling: [f64; LANES] = std::array::from_fn(|l| self.params.ceiling(2.0 * approach[l]));
+        let alpha_loc = std::array::from_fn(|l| {
+            let p = AvSwitchParams {
+                alpha_max: ceiling[l],
+                ..self.params
+            };
+            p.local_alpha(dv[l], gd[l], h[l], c[l])
+        });
+        (alpha_loc, t.v_sig.to_array(), ceiling)
     }
 }
 
@@ -701,7 +765,7 @@ impl<K: Kernel, const IAD: bool> PairStage for IndicatorStage<'_, K, IAD> {
 
     #[inline(always)]
     fn finish(&self, g: &Group, t: IndicatorSums, (shown, advanced): &mut Self::Out<'_>) {
-        let (alpha_loc, v_sig) = self.indicator.finish(g, t);
+        let (alpha_loc, v_sig, ceiling) = self.indicator.finish(g, t);
         if let Some([al, vs]) = shown {
             al.copy_from_slice(&alpha_loc[..g.valid]);
             vs.copy_from_slice(&v_sig[..g.valid]);
@@ -714,6 +778,10 @@ impl<K: Kernel, const IAD: bool> PairStage for IndicatorStage<'_, K, IAD> {
                 let dt = match self.dt {
                     Elapsed::Uniform(dt) => dt,
                     Elapsed::PerParticle(e) => e[g.first + l],
+                };
+                let p = AvSwitchParams {
+                    alpha_max: ceiling[l],
+                    ..*p
                 };
                 *a = p.advance(*a, alpha_loc[l], tau, dt);
             }

@@ -79,7 +79,12 @@ pub fn conduction<K: Kernel>(
         h: pos.h,
         m: pos.m,
         rho,
-        c: Conductivity { alpha_u, p, u },
+        c: Conductivity {
+            alpha_u,
+            p,
+            u,
+            contrast: false,
+        },
     };
     driver.run(&stage, [&mut du[nl.targets()]]);
 }
@@ -94,6 +99,13 @@ pub struct Conductivity<'a> {
     pub p: &'a [f64],
     /// Internal energy per mass.
     pub u: &'a [f64],
+    /// Each pair's term weighted by its contrast of internal energy,
+    /// `|u_i - u_j| / max(u_i, u_j)`: the flux then goes as the square of
+    /// a small jump, so heat crosses fronts (Sedov's hot gas against the
+    /// cold) at full strength while neighbours of similar `u` (Sod's
+    /// contact, u differing by 2x) exchange less (`docs/schemes.md`,
+    /// 2026-12-06, one scheme). Still antisymmetric: energy is conserved.
+    pub contrast: bool,
 }
 
 /// A group of targets' side of the conduction sum: `K/h_i^4`, `rho_i`,
@@ -104,6 +116,7 @@ pub(crate) struct ConductionTarget {
     pub(crate) rho: F64s,
     pub(crate) p: F64s,
     pub(crate) u: F64s,
+    pub(crate) contrast: bool,
 }
 
 impl ConductionTarget {
@@ -122,6 +135,7 @@ impl ConductionTarget {
             rho: g.load(rho),
             p: g.load(c.p),
             u: g.load(c.u),
+            contrast: c.contrast,
         }
     }
 
@@ -145,13 +159,26 @@ impl ConductionTarget {
 
     /// Partner `j`'s term of the sum (before the factor `alpha_u`),
     /// `m_j v_u (u_i - u_j) / rho_ij dW`, for the mean kernel derivative
-    /// `dW` ([`mean_derivative`](Self::mean_derivative)). A zero mass or
-    /// `dW` (partners beyond both supports) gives an exact zero.
+    /// `dW` ([`mean_derivative`](Self::mean_derivative)), times
+    /// `|u_i - u_j| / max(u_i, u_j)` with [`Conductivity::contrast`]. A
+    /// zero mass or `dW` (partners beyond both supports) gives an exact
+    /// zero.
     #[inline(always)]
     pub(crate) fn term(&self, m_j: F64s, dw: F64s, rho_j: f64, p_j: f64, u_j: f64) -> F64s {
         let rho_ij = 0.5 * (self.rho + rho_j);
         let v_u = ((self.p - p_j).abs() / rho_ij).sqrt();
-        m_j * v_u * (self.u - u_j) / rho_ij * dw
+        let du = self.u - u_j;
+        let flux = m_j * v_u * du / rho_ij * dw;
+        if self.contrast {
+            // max(u_i, u_j) = 0 only where both are 0, and then du = 0.
+            let top = self
+                .u
+                .max(F64s::splat(u_j))
+                .max(F64s::splat(f64::MIN_POSITIVE));
+            flux * du.abs() / top
+        } else {
+            flux
+        }
     }
 }
 

@@ -98,6 +98,18 @@ pub struct Scheme {
     /// (six fields, exchanged to the halos).
     #[serde(default)]
     pub av_cleaning: bool,
+    /// The viscosity switches' ceiling at weak shocks
+    /// ([`AvSwitchParams::weak_alpha`]: `alpha_max` at strong shocks, up
+    /// to this at weak ones, by the pair Mach number), or none. Without
+    /// switches it has no effect.
+    #[serde(default)]
+    pub weak_shock_alpha: Option<f64>,
+    /// The conduction's pair terms weighted by their contrast of internal
+    /// energy, `|u_i - u_j| / max(u_i, u_j)`
+    /// ([`Conductivity::contrast`](crate::conduction::Conductivity::contrast)).
+    /// Without conductivity it has no effect.
+    #[serde(default)]
+    pub conduction_contrast: bool,
 }
 
 impl Default for Scheme {
@@ -107,7 +119,12 @@ impl Default for Scheme {
 }
 
 /// The named schemes: (name, scheme, one line on what it is).
-pub const PRESETS: [(&str, Scheme, &str); 9] = [
+pub const PRESETS: [(&str, Scheme, &str); 10] = [
+    (
+        "gas",
+        Scheme::GAS,
+        "one scheme for every ideal-gas case (a candidate, not yet a default): `best` with AV cleaning, switches that rise to alpha 2 at weak shocks (0.5 at strong ones) and conductivity 2 weighted by each pair's contrast of u",
+    ),
     (
         "paper",
         Scheme::PAPER,
@@ -169,6 +186,8 @@ impl Scheme {
         artificial_stress: None,
         fixed_h: false,
         av_cleaning: false,
+        weak_shock_alpha: None,
+        conduction_contrast: false,
     };
 
     /// What SPH-EXA's `std` propagator runs: the paper's scheme without
@@ -204,6 +223,8 @@ impl Scheme {
         artificial_stress: None,
         fixed_h: false,
         av_cleaning: false,
+        weak_shock_alpha: None,
+        conduction_contrast: false,
     };
 
     /// [`Scheme::VE`] without the grad-h terms and with the artificial
@@ -233,6 +254,25 @@ impl Scheme {
             ..AvSwitchParams::SPHEXA
         }),
         ..Scheme::VE_AC
+    };
+
+    /// One scheme for every ideal-gas case, the candidate of issue 42 (not
+    /// yet any case's default): [`Scheme::BEST`] with AV cleaning (shear
+    /// and smooth flows keep their kinetic energy: Gresho, Kelvin-Helmholtz),
+    /// switches whose ceiling rises from 0.5 at strong shocks (Noh's and
+    /// Sedov's, into cold gas) to 2 at weak ones (Sod's: they ring behind
+    /// the front with less) ([`AvSwitchParams::ceiling`]), and conductivity
+    /// `alpha_u = 2` weighted by each pair's contrast of `u`
+    /// ([`Scheme::conduction_contrast`]: Sedov's front needs the heat flux
+    /// across its contrast of 10^5, Sod's contact, u differing by 2x,
+    /// smears with Price's full flux). Measured on every case at two
+    /// resolutions in `docs/schemes.md` (2026-12-06, one scheme).
+    pub const GAS: Scheme = Scheme {
+        av_cleaning: true,
+        conductivity: Some(2.0),
+        conduction_contrast: true,
+        weak_shock_alpha: Some(2.0),
+        ..Scheme::BEST
     };
 
     /// The `kelvin-helmholtz` case's scheme: the paper's (IAD, grad-h)
@@ -278,6 +318,8 @@ impl Scheme {
         artificial_stress: None,
         fixed_h: false,
         av_cleaning: false,
+        weak_shock_alpha: None,
+        conduction_contrast: false,
     };
 
     /// The `evrard` case's scheme: kernel gradients, no grad-h, viscosity
@@ -300,6 +342,8 @@ impl Scheme {
         artificial_stress: None,
         fixed_h: false,
         av_cleaning: false,
+        weak_shock_alpha: None,
+        conduction_contrast: false,
     };
 
     /// The preset called `name` (see [`PRESETS`]).
@@ -350,10 +394,14 @@ impl Scheme {
         };
     }
 
-    /// The switch parameters, when the viscosity is switched.
+    /// The switch parameters, when the viscosity is switched, with the
+    /// scheme's weak-shock ceiling ([`Scheme::weak_shock_alpha`]).
     pub fn switches(&self) -> Option<AvSwitchParams> {
         match self.viscosity {
-            Viscosity::Switched(p) => Some(p),
+            Viscosity::Switched(p) => Some(AvSwitchParams {
+                weak_alpha: self.weak_shock_alpha,
+                ..p
+            }),
             Viscosity::Constant { .. } => None,
         }
     }
@@ -376,6 +424,13 @@ impl Scheme {
                 )));
             }
             _ => {}
+        }
+        if let Some(a) = self.weak_shock_alpha {
+            if !(a > 0.0 && a.is_finite()) {
+                return Err(CoreError::Invalid(format!(
+                    "weak-shock alpha {a} must be a finite number > 0 (or off)"
+                )));
+            }
         }
         if let Some(a) = self.conductivity {
             if !(a > 0.0 && a.is_finite()) {
@@ -451,6 +506,9 @@ mod tests {
         s.conductivity = Some(f64::NAN);
         assert!(s.validate().unwrap_err().to_string().contains("NaN"));
         s.conductivity = None;
+        s.weak_shock_alpha = Some(f64::INFINITY);
+        assert!(s.validate().unwrap_err().to_string().contains("weak-shock"));
+        s.weak_shock_alpha = None;
         s.set_switches(true);
         s.set_alpha(-0.5);
         assert!(s.validate().is_err());

@@ -351,6 +351,63 @@ fn alpha_rises_in_compression_and_decays_where_expanding() {
     }
 }
 
+/// The weak-shock ceiling (`weak_alpha`) lifts alpha where a compression
+/// is slow against the sound speed and leaves it where the gas is cold.
+/// The same converging flow, hot (c = 10.5: pair Mach numbers about 0.2)
+/// and cold (c = 1e-3: above 20 where anything approaches, so within 1%
+/// of the strong ceiling), one update from alpha_min, with the ceiling
+/// 0.5 at strong shocks and 2 at weak ones.
+#[test]
+fn weak_shock_ceiling_lifts_alpha_only_in_slow_compression() {
+    let strong = AvSwitchParams {
+        alpha_max: 0.5,
+        ..AvSwitchParams::default()
+    };
+    let weak = AvSwitchParams {
+        weak_alpha: Some(2.0),
+        ..strong
+    };
+    let max_alpha = |s: &Setup, params: &AvSwitchParams| {
+        let mut alpha = vec![params.alpha_min; s.p.len()];
+        evolve_alpha(s, params, &mut alpha, 1e-3, 1);
+        alpha
+    };
+    let cold = converging(16, 0.3, 0.1);
+    let mut hot = converging(16, 0.3, 0.1);
+    hot.p.u.iter_mut().for_each(|u| *u = 100.0);
+    refresh(&mut hot);
+
+    let (a, b) = (max_alpha(&cold, &strong), max_alpha(&cold, &weak));
+    for i in 0..a.len() {
+        assert!(
+            b[i] <= a[i] * 1.01 + 1e-12,
+            "cold particle {i}: {} against {}",
+            b[i],
+            a[i]
+        );
+    }
+    let top = |v: &[f64]| v.iter().cloned().fold(0.0, f64::max);
+    assert!(
+        top(&a) > 0.4,
+        "the cold compression switches on: {}",
+        top(&a)
+    );
+
+    let (a, b) = (max_alpha(&hot, &strong), max_alpha(&hot, &weak));
+    assert!(
+        top(&a) <= 0.5 && top(&a) > 0.1,
+        "hot, strong ceiling: {}",
+        top(&a)
+    );
+    assert!(
+        top(&b) > 2.5 * top(&a),
+        "hot: {} against {}",
+        top(&b),
+        top(&a)
+    );
+    assert!(top(&b) <= 2.0);
+}
+
 #[test]
 fn alpha_decays_exponentially_in_uniform_flow() {
     let mut s = lattice(12, 0.6, 100.0, 21);
@@ -433,6 +490,26 @@ proptest! {
                 prop_assert!(a >= params.alpha_min && a <= params.alpha_max, "alpha = {}", a);
             }
         }
+    }
+
+    /// The weak-shock ceiling lies between `alpha_max` and `weak_alpha`,
+    /// equals `weak_alpha` at rest and moves monotonically towards
+    /// `alpha_max` as the pair Mach number grows.
+    #[test]
+    fn ceiling_is_between_its_ends_and_monotone(
+        alpha_max in 0.0..3.0f64,
+        weak in 0.0..3.0f64,
+        m1 in 0.0..50.0f64,
+        dm in 0.0..50.0f64,
+    ) {
+        let p = AvSwitchParams { alpha_max, weak_alpha: Some(weak), ..AvSwitchParams::default() };
+        let (lo, hi) = (alpha_max.min(weak), alpha_max.max(weak));
+        let (c1, c2) = (p.ceiling(m1), p.ceiling(m1 + dm));
+        prop_assert!(c1 >= lo - 1e-12 && c1 <= hi + 1e-12, "{}", c1);
+        prop_assert!((p.ceiling(0.0) - weak).abs() < 1e-12);
+        // Farther from alpha_max at the lower Mach number.
+        prop_assert!((c1 - alpha_max).abs() >= (c2 - alpha_max).abs() - 1e-12);
+        prop_assert_eq!(AvSwitchParams { weak_alpha: None, ..p }.ceiling(m1), alpha_max);
     }
 
     /// The relaxation alone: bounded, monotone towards its target, and a

@@ -253,11 +253,12 @@ fn compute_forces_with(
     tension: bool,
     cleaning: Cleaning,
 ) {
-    compute_forces_conducting(s, gradients, stress, tension, cleaning, None);
+    compute_forces_conducting(s, gradients, stress, tension, cleaning, None, false);
 }
 
 /// As `compute_forces_with`, with the artificial conductivity `alpha_u`
-/// inside the momentum pass.
+/// inside the momentum pass, each pair's term weighted by its contrast of
+/// u where `contrast`.
 fn compute_forces_conducting(
     s: &mut Setup,
     gradients: Gradients,
@@ -265,6 +266,7 @@ fn compute_forces_conducting(
     tension: bool,
     cleaning: Cleaning,
     conductivity: Option<f64>,
+    contrast: bool,
 ) {
     let p = &mut s.p;
     Eos::IdealGas { gamma: 5.0 / 3.0 }.apply(&p.rho, &p.u, None, &mut p.p, &mut p.c);
@@ -332,6 +334,7 @@ fn compute_forces_conducting(
             alpha_u,
             p: &p.p,
             u: &p.u,
+            contrast,
         }),
     };
     momentum_energy_with(&kernel(), &s.bbox, state, &factors, scheme, &s.list, rates);
@@ -632,6 +635,59 @@ fn conductivity_conserves_energy_and_flows_downhill() {
     assert!(du[coldest] >= 0.0, "the coldest particle must not cool");
 }
 
+/// Conduction weighted by each pair's contrast of u (`gas`'s) still only
+/// moves energy (sum m du/dt zero to round-off, gas at rest so that no
+/// other term heats), cools the hot spot's centre, and takes from a
+/// pair of similar u less than Price's: over a gentle bump (u from 1 to
+/// 1.2) the energy moved is at most 0.2 of Price's, over a steep one
+/// (1 to 100) the centre loses at least half of Price's rate.
+#[test]
+fn contrast_conduction_conserves_energy_and_spares_small_contrasts() {
+    let rates = |amplitude: f64, contrast: bool| {
+        let mut s = lattice(10, 0.3, 60.0, 5);
+        let n = s.p.len();
+        for i in 0..n {
+            let r2 = s.p.x[i].powi(2) + s.p.y[i].powi(2) + s.p.z[i].powi(2);
+            s.p.u[i] = 1.0 + amplitude * (-r2 / 0.01).exp();
+        }
+        compute_density(&mut s);
+        compute_iad(&mut s);
+        compute_forces_conducting(
+            &mut s,
+            Gradients::Iad,
+            None,
+            false,
+            Cleaning::Off,
+            Some(1.0),
+            contrast,
+        );
+        (s.p.du.clone(), s.p.m.clone(), s.p.u.clone())
+    };
+    for amplitude in [0.2, 99.0] {
+        let (price, _, _) = rates(amplitude, false);
+        let (du, m, u) = rates(amplitude, true);
+        let total: f64 = du.iter().zip(&m).map(|(d, m)| m * d).sum();
+        let scale: f64 = du.iter().zip(&m).map(|(d, m)| m * d.abs()).sum();
+        assert!(scale > 0.0);
+        assert!(total.abs() < 1e-13 * scale, "{total:e} vs {scale:e}");
+        let hottest = (0..u.len()).max_by(|&a, &b| u[a].total_cmp(&u[b])).unwrap();
+        assert!(du[hottest] < 0.0, "the hottest particle must cool");
+        if amplitude < 1.0 {
+            // Each pair's weight is at most 0.2 / 1.2 here.
+            let moved: f64 = du.iter().zip(&m).map(|(d, m)| m * d.abs()).sum();
+            let price: f64 = price.iter().zip(&m).map(|(d, m)| m * d.abs()).sum();
+            assert!(moved <= 0.2 * price, "{moved:e} against Price's {price:e}");
+        } else {
+            assert!(
+                du[hottest] < 0.5 * price[hottest],
+                "{} against {}",
+                du[hottest],
+                price[hottest]
+            );
+        }
+    }
+}
+
 /// The conduction summed inside the momentum pass is the conduction's own
 /// pass added to the momentum pass without it: bit for bit with IAD
 /// gradients (the same kernel derivatives at the same distance), to
@@ -649,7 +705,7 @@ fn conduction_inside_the_momentum_pass_equals_its_own_pass() {
         }
         compute_density(&mut s);
         compute_iad(&mut s);
-        compute_forces_conducting(&mut s, gradients, None, false, Cleaning::Off, None);
+        compute_forces_conducting(&mut s, gradients, None, false, Cleaning::Off, None, false);
         let mut expected = s.p.du.clone();
         let pos = positions(&s.p);
         let p = &s.p;
@@ -665,7 +721,15 @@ fn conduction_inside_the_momentum_pass_equals_its_own_pass() {
             &mut expected,
         );
         let accel = [s.p.ax.clone(), s.p.ay.clone(), s.p.az.clone()];
-        compute_forces_conducting(&mut s, gradients, None, false, Cleaning::Off, Some(2.0));
+        compute_forces_conducting(
+            &mut s,
+            gradients,
+            None,
+            false,
+            Cleaning::Off,
+            Some(2.0),
+            false,
+        );
         assert_eq!(accel, [s.p.ax.clone(), s.p.ay.clone(), s.p.az.clone()]);
         let scale = expected.iter().fold(0.0f64, |a, d| a.max(d.abs()));
         assert!(scale > 0.0);

@@ -169,6 +169,23 @@ pub const SCHEME_OPTIONS: &[SchemeOption] = &[
         listed: |_| true,
     },
     SchemeOption {
+        key: "weak-shock-alpha",
+        help: "The viscosity switches' ceiling at weak shocks: a particle's alpha may rise to \
+               --alpha + (W - --alpha) / (1 + (M / 0.5)^2), with M its fastest approaching \
+               pair's speed over their mean sound speed, so weak shocks (Sod's) get \
+               alpha near W and do not ring, strong ones into cold gas (Noh's, Sedov's) keep \
+               --alpha; a number >= 0 (0 = off), no effect without switches. Default: the \
+               scheme's (2 in `gas`, off in the other presets)",
+        values: Values::NonNegative,
+        get: |s| Setting::Number(s.weak_shock_alpha.unwrap_or(0.0)),
+        set: |s, v| {
+            if let Some(a) = v.number() {
+                s.weak_shock_alpha = (a > 0.0).then_some(a);
+            }
+        },
+        listed: |s| s.weak_shock_alpha.is_some(),
+    },
+    SchemeOption {
         key: "balsara",
         help: "The Balsara (1995) shear limiter: with f = |div v| / (|div v| + |curl v| + \
                1e-4 c/h) per particle, near 1 in compression and near 0 in shear, a constant \
@@ -183,7 +200,7 @@ pub const SCHEME_OPTIONS: &[SchemeOption] = &[
         key: "conductivity",
         help: "Artificial conductivity of internal energy alpha_u, a number >= 0 (0 = off; ~1 \
                smooths wall heating at shocks and walls). Default: the scheme's (1 in `ve-ac`, \
-               3 in `evrard`, off in the other presets)",
+               3 in `evrard`, 2 in `gas`, off in the other presets)",
         values: Values::NonNegative,
         get: |s| Setting::Number(s.conductivity.unwrap_or(0.0)),
         set: |s, v| {
@@ -192,6 +209,18 @@ pub const SCHEME_OPTIONS: &[SchemeOption] = &[
             }
         },
         listed: |s| s.conductivity.is_some(),
+    },
+    SchemeOption {
+        key: "conduction-contrast",
+        help: "Weight each pair's conduction by its contrast of internal energy, |u_i - u_j| / \
+               max(u_i, u_j): heat crosses fronts (a blast's hot gas against the cold) at \
+               full strength while neighbours of similar u (a contact) exchange less; no effect \
+               without --conductivity. Default: the scheme's (on in `gas`, off in the other \
+               presets)",
+        values: Values::Switch,
+        get: |s| Setting::Switch(s.conduction_contrast),
+        set: |s, v| s.conduction_contrast = v.on().unwrap_or(s.conduction_contrast),
+        listed: |s| s.conduction_contrast,
     },
     SchemeOption {
         key: "artificial-stress",

@@ -227,6 +227,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 alpha_u,
                 p: &p.p,
                 u: &p.u,
+                contrast: s.conduction_contrast,
             }),
         };
         let (k, f, list) = (&self.kernel, &self.buf.factors, &self.list);
