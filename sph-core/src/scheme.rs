@@ -123,7 +123,7 @@ pub const PRESETS: [(&str, Scheme, &str); 10] = [
     (
         "gas",
         Scheme::GAS,
-        "one scheme for every ideal-gas case (a candidate, not yet a default): `best` with AV cleaning, switches that rise to alpha 2 at weak shocks (0.5 at strong ones) and conductivity 2 weighted by each pair's contrast of u",
+        "one scheme for every ideal-gas case (a candidate, not yet a default): `best` with AV cleaning, switches that rise to alpha 2 at weak shocks (0.4 at strong ones) and conductivity 2 weighted by each pair's contrast of u",
     ),
     (
         "paper",
@@ -259,15 +259,20 @@ impl Scheme {
     /// One scheme for every ideal-gas case, the candidate of issue 42 (not
     /// yet any case's default): [`Scheme::BEST`] with AV cleaning (shear
     /// and smooth flows keep their kinetic energy: Gresho, Kelvin-Helmholtz),
-    /// switches whose ceiling rises from 0.5 at strong shocks (Noh's and
-    /// Sedov's, into cold gas) to 2 at weak ones (Sod's: they ring behind
-    /// the front with less) ([`AvSwitchParams::ceiling`]), and conductivity
+    /// switches whose ceiling rises from 0.4 at strong shocks (Noh's and
+    /// Sedov's, into cold gas; 0.5 thins Noh's plateau by 3.5%) to 2 at
+    /// weak ones (Sod's: they ring behind the front with less)
+    /// ([`AvSwitchParams::ceiling`]), and conductivity
     /// `alpha_u = 2` weighted by each pair's contrast of `u`
     /// ([`Scheme::conduction_contrast`]: Sedov's front needs the heat flux
     /// across its contrast of 10^5, Sod's contact, u differing by 2x,
     /// smears with Price's full flux). Measured on every case at two
     /// resolutions in `docs/schemes.md` (2026-12-06, one scheme).
     pub const GAS: Scheme = Scheme {
+        viscosity: Viscosity::Switched(AvSwitchParams {
+            alpha_max: 0.4,
+            ..AvSwitchParams::SPHEXA
+        }),
         av_cleaning: true,
         conductivity: Some(2.0),
         conduction_contrast: true,
