@@ -31,6 +31,11 @@
 //!   block time steps' sub-steps differ in length; 2026-12-05): 0.0218
 //!   and 0.0170, the paper's 0.0901; the bounds stay.
 //!
+//! `gas`, the other ideal-gas cases' default (issue 42), is not this
+//! case's: with its m / rho0 volume elements the contact keeps a pressure
+//! blip, and the time means are 0.0667 at 16 and 0.0442 at 32 (block
+//! steps, 2026-12-06), over both bounds.
+//!
 //! The validation brief's goal (`docs/cases.md`), v_rms / c < 1e-2 at t = 1 and 32 per side, holds
 //! only in the exact lattice's realisation; the test prints the value at
 //! t = 1 but does not bound it.
@@ -70,9 +75,14 @@ const NOISE: Curve = Curve {
 /// The time-mean of v_rms / c over the steps to t = 1, its value at
 /// t = 1, and the mean densities of the core (max-norm radius < 0.15) and
 /// of the thin gas far from the cube (> 0.35).
-fn run(side: usize, paper: bool, time_steps: TimeSteps, momentum: f64) -> (f64, f64, f64, f64) {
+fn run(
+    side: usize,
+    preset: Option<(&str, Scheme)>,
+    time_steps: TimeSteps,
+    momentum: f64,
+) -> (f64, f64, f64, f64) {
     let overrides = SchemeOverrides {
-        preset: paper.then_some(Scheme::PAPER),
+        preset: preset.map(|p| p.1),
         ..Default::default()
     };
     let mut scene = sph_validation::scene_with("isobaric-cube", side, &overrides);
@@ -86,14 +96,14 @@ fn run(side: usize, paper: bool, time_steps: TimeSteps, momentum: f64) -> (f64, 
             c[i] += PERTURBATION * spacing * (rng.uniform() - 0.5);
         }
     }
-    let name = format!(
-        "isobaric{side}{}-{time_steps:?}",
-        if paper { "-paper" } else { "" }
-    );
+    let label = preset.map_or(String::new(), |p| format!("-{}", p.0));
+    let name = format!("isobaric{side}{label}-{time_steps:?}");
     let out = sph_validation::scratch(&name);
     let s = sph_validation::run_writing_particles(scene, Stop::Time(1.0), &out);
-    assert!(s.energy_rel_drift.abs() < 1e-3, "{}", s.energy_rel_drift);
-    assert!(s.momentum_rel_drift < momentum, "{}", s.momentum_rel_drift);
+    println!(
+        "{name}: energy drift {:.1e}, momentum drift {:.1e}",
+        s.energy_rel_drift, s.momentum_rel_drift
+    );
 
     let text = std::fs::read_to_string(out.join("curve.csv")).expect("curve.csv");
     // (t, v_rms / c) after each step.
@@ -132,10 +142,9 @@ fn run(side: usize, paper: bool, time_steps: TimeSteps, momentum: f64) -> (f64, 
             n_far += 1;
         }
     }
-    println!(
-        "{side} per side{}: mean v_rms / c {mean:.5}, at t = 1 {last:.5}",
-        if paper { ", paper's scheme" } else { "" }
-    );
+    println!("{side} per side{label}: mean v_rms / c {mean:.5}, at t = 1 {last:.5}");
+    assert!(s.energy_rel_drift.abs() < 1e-3, "{}", s.energy_rel_drift);
+    assert!(s.momentum_rel_drift < momentum, "{}", s.momentum_rel_drift);
     (mean, last, core / n_core as f64, far / n_far as f64)
 }
 
@@ -143,7 +152,7 @@ fn run(side: usize, paper: bool, time_steps: TimeSteps, momentum: f64) -> (f64, 
 fn isobaric_cube_stays_put() {
     stays_put(TimeSteps::Global, 1e-12);
     // A scheme known to be noisy at the contact fails the bound.
-    let (paper, _, _, _) = run(16, true, TimeSteps::Global, 1e-12);
+    let (paper, _, _, _) = run(16, Some(("paper", Scheme::PAPER)), TimeSteps::Global, 1e-12);
     assert!(
         paper > 2.0 * BOUND_16,
         "the paper's scheme: mean v_rms / c {paper} at 16, within reach of the bound {BOUND_16}"
@@ -164,8 +173,8 @@ fn isobaric_cube_stays_put_under_block_time_steps() {
 }
 
 fn stays_put(time_steps: TimeSteps, momentum: f64) {
-    let (coarse, _, _, _) = run(16, false, time_steps, momentum);
-    let (fine, _, core, far) = run(32, false, time_steps, momentum);
+    let (coarse, _, _, _) = run(16, None, time_steps, momentum);
+    let (fine, _, core, far) = run(32, None, time_steps, momentum);
     assert!(coarse < BOUND_16, "mean v_rms / c = {coarse} at 16");
     assert!(fine < BOUND_32, "mean v_rms / c = {fine} at 32");
     assert!(

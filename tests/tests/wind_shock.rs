@@ -1,9 +1,12 @@
 //! Wind-shock (cloud crushing, `docs/cases.md` set-up) at the case's default
 //! 64 wind particles per unit length (16,539 particles cut from a 16^3
-//! glass block) to 2 tau_KH, with the case's scheme (`ve`): a robustness
-//! test.
+//! glass block) to 2 tau_KH, with the case's scheme (`gas` since
+//! 2026-12-06; `ve` before): a robustness test.
 //!
-//! Measured (2 threads): 290 steps; the surviving fraction (rho >= 6.4,
+//! Measured with `gas` (2 threads, global steps, 2026-12-06): 431 steps,
+//! surviving fraction 0.85 after the first step, 0.52 at 0.2 tau_KH, 0.12
+//! at 0.5 and 0 from 0.75 tau_KH (conduction mixes the cloud's edge
+//! faster). Measured with `ve` (2 threads): 290 steps; the surviving fraction (rho >= 6.4,
 //! u <= 1.35, over the nominal cloud mass) 0.85 after the first step (the
 //! cloud's edge is smoothed below 6.4), 0.54 at 0.2 tau_KH, 0.09 at
 //! 0.75 tau_KH and 0 from 1.5 tau_KH: at this resolution the cloud has a

@@ -30,9 +30,9 @@ impl Case for GreshoVortex {
         }
     }
 
-    /// The paper's scheme.
+    /// `gas`, the default of every ideal-gas case ([`Scheme::GAS`]).
     fn default_scheme(&self) -> Scheme {
-        Scheme::PAPER
+        Scheme::GAS
     }
 
     /// A `side x side x 8` lattice.

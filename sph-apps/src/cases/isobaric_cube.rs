@@ -46,7 +46,9 @@ impl Case for IsobaricCube {
     }
 
     /// Pressure-energy volumes ([`Scheme::CONTACT`]): the cube's contact
-    /// keeps one smoothed pressure.
+    /// keeps one smoothed pressure. Not yet `gas` ([`Scheme::GAS`], the
+    /// default of the other ideal-gas cases): its time-mean v_rms / c is
+    /// 0.067 at 16 and 0.044 at 32 per side, against 0.022 and 0.017.
     fn default_scheme(&self) -> Scheme {
         Scheme::CONTACT
     }

@@ -10,15 +10,15 @@ use sph_tree::{Boundary, BoundingBox};
 #[derive(Debug, Clone, Copy)]
 pub struct NohImplosion;
 
-/// Noh's scheme: kernel gradients (grad-h kept) and viscosity switches up
-/// to alpha = 0.7. With the paper's constant alpha = 1 the viscosity also
+/// Noh's scheme: `gas`, the default of every ideal-gas case
+/// ([`Scheme::GAS`]): its viscosity switches stop at alpha = 0.4 in shocks
+/// into cold gas. With the paper's constant alpha = 1 the viscosity also
 /// heats the converging inflow and the mean post-shock density (0.3 to 0.8
-/// shock radii) stays near 21 rho0 against 64 rho0. With this scheme it is
-/// 58 rho0 at 14328 particles (30^3 cut), 66 rho0 at 26745 (37^3 cut) and
-/// 62 rho0 at 33552 (40^3 cut), flat within a few percent there; alpha_max
-/// 0.5 overshoots (76 rho0 at 30^3, a hump instead of a plateau) and 1.0
-/// undershoots (40 rho0).
-pub const SCHEME: Scheme = Scheme::NOH;
+/// shock radii) stays near 21 rho0 against 64 rho0. The `noh` preset
+/// ([`Scheme::NOH`], kernel gradients, switches up to 0.7), this case's
+/// scheme before `gas`, gives 58 rho0 at 14328 particles (30^3 cut), 66
+/// rho0 at 26745 (37^3 cut) and 62 rho0 at 33552 (40^3 cut).
+pub const SCHEME: Scheme = Scheme::GAS;
 
 /// Adiabatic index (that of the default gas, [`super::Physics::IDEAL_GAS`]).
 pub const GAMMA: f64 = 5.0 / 3.0;

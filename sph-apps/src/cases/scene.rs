@@ -48,10 +48,9 @@ use sph_tree::{Boundary, BoundingBox};
 /// The name of a scene's runs (`out/scene`, the `case` of its checkpoints).
 pub const NAME: &str = "scene";
 
-/// The scheme a scene runs with: `best`, the preset with the lowest
-/// Sedov errors per second that is also nearest the references on Noh and
-/// Evrard (issue 42 is to make one such scheme every case's default).
-pub const SCHEME: Scheme = Scheme::BEST;
+/// The scheme a scene runs with: `gas` ([`Scheme::GAS`]), the default of
+/// the ideal-gas cases.
+pub const SCHEME: Scheme = Scheme::GAS;
 
 /// First time step when the file gives none (`minDt`): only the
 /// integrator's `dt_{-1}`, since a scene's first step is the criteria's.

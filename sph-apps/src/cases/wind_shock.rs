@@ -70,9 +70,9 @@ impl Case for WindShock {
         }
     }
 
-    /// SPH-EXA's default scheme, `ve`.
+    /// `gas`, the default of every ideal-gas case ([`Scheme::GAS`]).
     fn default_scheme(&self) -> Scheme {
-        Scheme::VE
+        Scheme::GAS
     }
 
     fn initial_state(&self, request: &Request<'_>) -> Result<InitialState, AppError> {

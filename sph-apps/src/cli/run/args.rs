@@ -87,7 +87,10 @@ pub(crate) struct RunArgs {
     #[arg(long, default_value_t = 150, allow_negative_numbers = true,
           value_parser = parse_count)]
     pub(crate) ngmax: usize,
-    /// Scheme preset to start from instead of the case's own: `paper`
+    /// Scheme preset to start from instead of the case's own: `gas` (the
+    /// ideal-gas cases' default: `best` with AV cleaning, switches from
+    /// alpha 0.4 at strong shocks to 2 at weak ones, conductivity 2
+    /// weighted by each pair's contrast of u), `paper`
     /// (the seed paper's eqs. 1-5: IAD, grad-h, constant alpha = 1), `std`
     /// (SPH-EXA's std: as paper without grad-h), `ve` (SPH-EXA's default:
     /// volume elements, grad-h, IAD, its switches), `ve-ac` (ve without
@@ -290,7 +293,7 @@ pub(crate) struct RunArgs {
     /// --softening or else from the file's attributes (`periodic` or
     /// `boundaryType`, `box`, `gamma`, `gravConstant`), and --end-time or
     /// --steps is needed; what matters and is not said is an error that
-    /// names the option (the scheme: `best`).
+    /// names the option (the scheme: `gas`).
     #[arg(long, value_name = "FILE[:K]")]
     pub(crate) init: Option<String>,
     /// A scene's boundaries (--init FILE without a case): `periodic`,
