@@ -30,7 +30,7 @@ pub struct EvrardCollapse;
 /// t = 1.0 is +0.1% of the reference at 30^3 and +3.4% at 40^3 with
 /// conductivity 3, +13.3% and +13.6% with 1; 3 was chosen at 30^3 on the
 /// lattice from 1, 2, 2.5, 3, 4 (`docs/cases.md`, Evrard). Not yet `gas`
-/// ([`Scheme::GAS`], the default of the other ideal-gas cases): at t = 2.0
+/// ([`Scheme::GAS`], issue 42's default for the ideal-gas cases): at t = 2.0
 /// its E_kin is 13.9% below the reference at `-n 30` and its E_int 6.6%
 /// below at `-n 50` (2026-12-06, `docs/schemes.md`).
 pub const SCHEME: Scheme = Scheme::EVRARD;

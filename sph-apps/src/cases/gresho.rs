@@ -30,7 +30,9 @@ impl Case for GreshoVortex {
         }
     }
 
-    /// `gas`, the default of every ideal-gas case ([`Scheme::GAS`]).
+    /// `gas` ([`Scheme::GAS`]), issue 42's one default for the ideal-gas
+    /// cases (Sedov, Kelvin-Helmholtz, the isobaric cube and Evrard keep
+    /// their own until it meets their bounds).
     fn default_scheme(&self) -> Scheme {
         Scheme::GAS
     }

@@ -100,8 +100,9 @@ impl Case for KelvinHelmholtz {
     /// `shear` ([`Scheme::SHEAR`]): viscosity switches with the AV cleaning
     /// (after SPH-EXA's, which `docs/cases.md` credits with its family's best
     /// KH figures, 0.12-0.126; ours: 0.117 at the default 64^2 x 8). Not yet
-    /// `gas` ([`Scheme::GAS`], the default of most ideal-gas cases): M(1.5)
-    /// 0.080 at 32^2 x 8 but 0.111 at 64^2 x 8, below `shear`'s 0.117.
+    /// `gas` ([`Scheme::GAS`], issue 42's default for the ideal-gas
+    /// cases): M(1.5) 0.080 at 32^2 x 8 but 0.111 at 64^2 x 8, below
+    /// `shear`'s 0.117.
     fn default_scheme(&self) -> Scheme {
         Scheme::SHEAR
     }

@@ -10,7 +10,7 @@ use sph_tree::{Boundary, BoundingBox};
 #[derive(Debug, Clone, Copy)]
 pub struct NohImplosion;
 
-/// Noh's scheme: `gas`, the default of every ideal-gas case
+/// Noh's scheme: `gas`, issue 42's one default for the ideal-gas cases
 /// ([`Scheme::GAS`]): its viscosity switches stop at alpha = 0.4 in shocks
 /// into cold gas. With the paper's constant alpha = 1 the viscosity also
 /// heats the converging inflow and the mean post-shock density (0.3 to 0.8

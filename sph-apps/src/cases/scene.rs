@@ -48,8 +48,8 @@ use sph_tree::{Boundary, BoundingBox};
 /// The name of a scene's runs (`out/scene`, the `case` of its checkpoints).
 pub const NAME: &str = "scene";
 
-/// The scheme a scene runs with: `gas` ([`Scheme::GAS`]), the default of
-/// the ideal-gas cases.
+/// The scheme a scene runs with: `gas` ([`Scheme::GAS`]), issue 42's
+/// default for the ideal-gas cases.
 pub const SCHEME: Scheme = Scheme::GAS;
 
 /// First time step when the file gives none (`minDt`): only the

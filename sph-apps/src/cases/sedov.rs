@@ -33,10 +33,10 @@ impl Case for SedovBlast {
     }
 
     /// `best`: the lowest L1 of rho, P and |v| per second of the presets.
-    /// Not yet `gas` ([`Scheme::GAS`], the other ideal-gas cases'
-    /// default): under block time steps its conduction (alpha_u = 2)
-    /// conserves energy to 2.8e-3 at 20^3, outside this case's bound of
-    /// 2e-3 (`docs/block-timesteps.md`).
+    /// Not yet `gas` ([`Scheme::GAS`], issue 42's default for the
+    /// ideal-gas cases): under block time steps its conduction
+    /// (alpha_u = 2) conserves energy to 2.8e-3 at 20^3, outside this
+    /// case's bound of 2e-3 (`docs/block-timesteps.md`).
     fn default_scheme(&self) -> Scheme {
         Scheme::BEST
     }
