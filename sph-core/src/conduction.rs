@@ -18,6 +18,7 @@ use crate::density::Positions;
 use crate::pair_loop::{F64s, Group, PairLoop, PairStage};
 use sph_kernels::Kernel;
 use sph_tree::{BoundingBox, CompactNeighborList};
+use std::sync::atomic::{AtomicU8, Ordering};
 
 /// Adds the conductive heating rate to `du` for every target of `nl`
 /// (neighbours in ascending order: independent of the thread count).
@@ -216,6 +217,85 @@ impl<K: Kernel> PairStage for Conduction<'_, K> {
     fn finish(&self, _: &Group, (_, _, sum): Self::Sums, [du]: &mut Self::Out<'_>) {
         let add = (self.c.alpha_u * sum).to_array();
         for (d, a) in du.iter_mut().zip(add) {
+            *d += a;
+        }
+    }
+}
+
+/// The conduction under block time steps, exchanged as impulses
+/// (`docs/block-timesteps.md`, "Conduction as impulses"): each pair's
+/// flux is integrated over the shorter of its two steps and given to both
+/// partners at once, at the kick of the one whose step starts now. A pair
+/// of particles that start their steps together exchanges over the
+/// shorter step on both sides; a target that starts its step now against
+/// a partner inside its own (longer) step takes the pair over the
+/// target's step, and the partner, a target of the receivers' pass,
+/// takes the same term over the same step. Each pair's two impulses are
+/// one antisymmetric term times one step: energy is conserved to
+/// round-off whatever the steps, which a rate held over each particle's
+/// own step is not.
+pub(crate) struct ConductionImpulses<'a, K> {
+    pub(crate) kernel: &'a K,
+    pub(crate) h: &'a [f64],
+    pub(crate) m: &'a [f64],
+    pub(crate) rho: &'a [f64],
+    pub(crate) c: Conductivity<'a>,
+    /// Per local particle: the step it starts now or is inside.
+    pub(crate) step: &'a [f64],
+    /// Per local particle: 1 where its step starts now, else 0.
+    pub(crate) starts: &'a [f64],
+    /// Set to 0 for every partner inside its step (the receivers) met by
+    /// a target; `None` in the receivers' pass.
+    pub(crate) receivers: Option<&'a [AtomicU8]>,
+}
+
+impl<K: Kernel> PairStage for ConductionImpulses<'_, K> {
+    /// `1/h`, the conduction's side of the targets, their steps, whether
+    /// they start now, the sum.
+    type Sums = (F64s, ConductionTarget, F64s, F64s, F64s);
+    type Out<'o> = [&'o mut [f64]; 1];
+    type Stats = ();
+
+    #[inline(always)]
+    fn start(&self, g: &Group) -> Self::Sums {
+        let inv_hi = 1.0 / g.load(self.h);
+        let target = ConductionTarget::load(g, self.kernel.norm(), inv_hi, self.rho, &self.c);
+        let (step, starts) = (g.load(self.step), g.load(self.starts));
+        (inv_hi, target, step, starts, F64s::splat(0.0))
+    }
+
+    #[inline(always)]
+    fn pair(&self, s: &mut Self::Sums, j: usize, _: [F64s; 3], r2: F64s) {
+        let (inv_hi, target, step_i, starts_i, sum) = s;
+        let step_j = F64s::splat(self.step[j]);
+        // Targets that start now (1) and the receivers (0).
+        let weight = if self.starts[j] != 0.0 {
+            let shorter = step_i.min(step_j);
+            *starts_i * shorter + (1.0 - *starts_i) * step_j
+        } else {
+            if let Some(r) = self.receivers {
+                if r[j].load(Ordering::Relaxed) != 0 {
+                    r[j].store(0, Ordering::Relaxed);
+                }
+            }
+            *starts_i * *step_i
+        };
+        let c = &self.c;
+        let dw = target.mean_derivative(
+            self.kernel,
+            self.kernel.norm(),
+            r2,
+            *inv_hi,
+            1.0 / self.h[j],
+        );
+        let m_j = F64s::splat(self.m[j]);
+        *sum += target.term(m_j, dw, self.rho[j], c.p[j], c.u[j]) * weight;
+    }
+
+    #[inline(always)]
+    fn finish(&self, _: &Group, s: Self::Sums, [out]: &mut Self::Out<'_>) {
+        let add = (self.c.alpha_u * s.4).to_array();
+        for (d, a) in out.iter_mut().zip(add) {
             *d += a;
         }
     }

@@ -116,6 +116,21 @@ pub(super) struct BlockState {
 }
 
 impl BlockState {
+    /// Owned particle `i` (`k` from the first owned)'s bin from now on and
+    /// whether it starts a step now, once [`Hydro::new_bins`] has chosen:
+    /// the bin the kick gives it.
+    pub(super) fn bin_from_now(&self, p: &Particles, i: usize, k: usize) -> (Bin, bool) {
+        let woken = self
+            .wake
+            .get(i)
+            .map_or(u8::MAX, |w| w.load(Ordering::Relaxed));
+        if self.active[k] {
+            (Bin(self.new_bin[k].min(woken)), true)
+        } else {
+            (Bin(bin_of(p.bin[i]).0.min(woken)), false)
+        }
+    }
+
     /// Each local particle's time since its last update (its own step;
     /// 0 at the first sub-step), for the viscosity switches.
     pub(super) fn elapsed(&self) -> &[f64] {
@@ -398,7 +413,9 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         };
         let line = next;
         self.new_bins(p, bbox, &line, owned.clone(), ti, first)?;
-        let fallbacks = self.kick(p, &line, owned.clone(), ti, first, step)?;
+        self.conduction_impulses(p, bbox, &line, owned.clone())?;
+        let fallbacks = self.kick(p, &line, owned.clone(), ti, first, step)?
+            + self.apply_conduction_impulses(p, owned.clone());
         let (next, limit) = self.next_tick(p, owned.clone(), ti);
         clock.lap(Stage::Timestep);
 

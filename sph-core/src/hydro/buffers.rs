@@ -70,6 +70,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         self.tree = Octree::default();
         self.gravity_tree = Octree::default();
         self.buf = StepBuffers::default();
+        self.impulses = Default::default();
     }
 
     /// Frees the octree once the neighbours are found, where nothing

@@ -51,6 +51,7 @@ macro_rules! hydro_state {
 }
 
 mod block;
+mod block_conduction;
 mod buffers;
 mod config;
 mod predict;
@@ -59,6 +60,7 @@ mod stages;
 mod stir;
 
 use block::BlockState;
+use block_conduction::ImpulseBuffers;
 use buffers::StepBuffers;
 pub use config::HydroConfig;
 pub use predict::{predict_field, PREDICTED};
@@ -95,6 +97,8 @@ pub struct Hydro<K: Kernel, C: Communicator = SerialComm> {
     dt_cap: f64,
     /// Block time steps: the time line, the current tick and work arrays.
     block: BlockState,
+    /// The conduction's impulses under block steps.
+    impulses: ImpulseBuffers,
 }
 
 impl<K: Kernel> Hydro<K> {
@@ -160,6 +164,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             dt_prev: dt0,
             dt_cap: f64::INFINITY,
             block: BlockState::default(),
+            impulses: ImpulseBuffers::default(),
         })
     }
 

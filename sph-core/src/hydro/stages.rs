@@ -223,12 +223,17 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             stress: s
                 .artificial_stress
                 .map(|e| ArtificialStress::new(e, self.config.neighbors.ng0, &self.kernel)),
-            conduction: s.conductivity.map(|alpha_u| Conductivity {
-                alpha_u,
-                p: &p.p,
-                u: &p.u,
-                contrast: s.conduction_contrast,
-            }),
+            // On the time line the conduction is exchanged as impulses
+            // at the kicks (`block_conduction.rs`), outside `du`.
+            conduction: s
+                .conductivity
+                .filter(|_| !block)
+                .map(|alpha_u| Conductivity {
+                    alpha_u,
+                    p: &p.p,
+                    u: &p.u,
+                    contrast: s.conduction_contrast,
+                }),
         };
         let (k, f, list) = (&self.kernel, &self.buf.factors, &self.list);
         momentum_energy_with(k, bbox, state, f, scheme, list, rates)
