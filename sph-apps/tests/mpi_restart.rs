@@ -64,12 +64,19 @@ fn written_on_two_ranks_restarted_on_one_and_four() {
     }
     // Block time steps (the case's default): the checkpoint falls due at
     // sub-step 10 and is written at a later synchronisation point (sub-step
-    // 47 under Sedov's scheme, `best`, with the longest step pinned to an
-    // eighth of the span); the time line (tick, span, longest bin, the
-    // start ramp), the held fields and the switches continue from it.
+    // 47 under `best`, with the longest step pinned to an eighth of the
+    // span); the time line (tick, span, longest bin, the start ramp), the
+    // held fields and the switches continue from it.
     restarted_on_one_and_four(
         "sedov",
-        &["--time-steps", "block", "--dt-max", "0.00625"],
+        &[
+            "--time-steps",
+            "block",
+            "--dt-max",
+            "0.00625",
+            "--scheme",
+            "best",
+        ],
         [47, 55],
     );
 }

@@ -151,6 +151,7 @@ fn benches(c: &mut Criterion) {
                     az: &mut *az,
                     du: &mut *du,
                     criteria: None,
+                    impulse: None,
                 };
                 black_box(momentum_energy(
                     &kernel, &bbox, state, &factors, grad, 1.0, &list, rates,
@@ -169,6 +170,7 @@ fn benches(c: &mut Criterion) {
                     az: &mut *az,
                     du: &mut *du,
                     criteria: None,
+                    impulse: None,
                 };
                 black_box(momentum_energy_switched(
                     &kernel, &bbox, state, &factors, grad, &alpha, &list, rates,

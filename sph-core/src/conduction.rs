@@ -18,7 +18,7 @@ use crate::density::Positions;
 use crate::pair_loop::{F64s, Group, PairLoop, PairStage};
 use sph_kernels::Kernel;
 use sph_tree::{BoundingBox, CompactNeighborList};
-use std::sync::atomic::{AtomicU8, Ordering};
+use std::sync::atomic::{AtomicI64, Ordering};
 
 /// Adds the conductive heating rate to `du` for every target of `nl`
 /// (neighbours in ascending order: independent of the thread count).
@@ -85,6 +85,7 @@ pub fn conduction<K: Kernel>(
             p,
             u,
             contrast: false,
+            impulses: None,
         },
     };
     driver.run(&stage, [&mut du[nl.targets()]]);
@@ -107,6 +108,37 @@ pub struct Conductivity<'a> {
     /// contact, u differing by 2x) exchange less (`docs/schemes.md`,
     /// 2026-12-06, one scheme). Still antisymmetric: energy is conserved.
     pub contrast: bool,
+    /// Under block time steps, the pair terms as impulses
+    /// ([`ImpulseWeights`]); `None`: a rate added to `du/dt`.
+    pub impulses: Option<ImpulseWeights<'a>>,
+}
+
+/// The conduction under block time steps as impulses
+/// (`docs/block-timesteps.md`, "Conduction as impulses"). A pair's term as
+/// a rate held over each particle's own step is not conserved (the
+/// particle with the longer step keeps its last rate while its partner
+/// is re-evaluated); as impulses each pair exchanges, whenever one of
+/// the two starts a step, its term times the time since the pair's last
+/// exchange, `min(since_i, since_j)` (the later of the two partners' last
+/// kicks), on both sides at once: the target (starting a step) in its
+/// sum, a partner inside its step in its [`gains`](Self::gains), in fixed
+/// point (integer sums do not depend on the order of the adds: runs stay
+/// independent of thread and rank counts). The exchanges tile time and
+/// each is one antisymmetric term times one interval: energy is
+/// conserved to round-off whatever the steps.
+#[derive(Debug, Clone, Copy)]
+pub struct ImpulseWeights<'a> {
+    /// Per local particle: the time since its last kick (the step it
+    /// just ended where it starts one now, else the time since its step
+    /// began).
+    pub since: &'a [f64],
+    /// Per local particle: whether its step starts now.
+    pub starts: &'a [bool],
+    /// Per local particle: the impulse of `u` partners inside their step
+    /// receive, in units of `1 / inv_quantum`.
+    pub gains: &'a [AtomicI64],
+    /// The fixed point's scale.
+    pub inv_quantum: f64,
 }
 
 /// A group of targets' side of the conduction sum: `K/h_i^4`, `rho_i`,
@@ -118,26 +150,67 @@ pub(crate) struct ConductionTarget {
     pub(crate) p: F64s,
     pub(crate) u: F64s,
     pub(crate) contrast: bool,
+    /// With impulses: the targets' time since their last kick, their
+    /// masses and the lanes whose sums are kept.
+    since: F64s,
+    m: F64s,
+    lanes: u32,
 }
 
 impl ConductionTarget {
-    /// The targets of `g` with `1/h` = `inv_hi`.
+    /// The targets of `g` with `1/h` = `inv_hi` (`m`: the masses, read
+    /// with impulses).
     #[inline(always)]
     pub(crate) fn load(
         g: &Group,
         norm: f64,
         inv_hi: F64s,
         rho: &[f64],
+        m: &[f64],
         c: &Conductivity<'_>,
     ) -> Self {
         let ih2 = inv_hi * inv_hi;
+        let zero = F64s::splat(0.0);
+        let (since, m) = c
+            .impulses
+            .map_or((zero, zero), |w| (g.load(w.since), g.load(m)));
         Self {
             ki4: norm * (ih2 * ih2),
             rho: g.load(rho),
             p: g.load(c.p),
             u: g.load(c.u),
             contrast: c.contrast,
+            since,
+            m,
+            lanes: g.active,
         }
+    }
+
+    /// Partner `j`'s `term` as the targets' sum takes it: as is (a rate),
+    /// or with [`Conductivity::impulses`] times the time since the pair's
+    /// last exchange, the partner's side going to its gains where it is
+    /// inside its step. `m_j` is the partner's mass.
+    #[inline(always)]
+    pub(crate) fn weigh(&self, c: &Conductivity<'_>, j: usize, m_j: f64, term: F64s) -> F64s {
+        let Some(w) = &c.impulses else {
+            return term;
+        };
+        let flux = term * self.since.min(F64s::splat(w.since[j]));
+        if !w.starts[j] && m_j > 0.0 {
+            // -alpha_u m_i (term / m_j) dt per kept lane, each rounded on
+            // its own (the lanes' grouping differs with the rank count).
+            let gain = (-c.alpha_u / m_j * w.inv_quantum) * flux * self.m;
+            let mut q = 0i64;
+            for (l, g) in gain.to_array().into_iter().enumerate() {
+                if self.lanes & (1 << l) != 0 {
+                    q = q.wrapping_add(g.round() as i64);
+                }
+            }
+            if q != 0 {
+                w.gains[j].fetch_add(q, Ordering::Relaxed);
+            }
+        }
+        flux
     }
 
     /// `dW = (K/h_i^4 w'(r/h_i) + K/h_j^4 w'(r/h_j)) / 2` at the squared
@@ -201,7 +274,7 @@ impl<K: Kernel> PairStage for Conduction<'_, K> {
     #[inline(always)]
     fn start(&self, g: &Group) -> Self::Sums {
         let inv_hi = 1.0 / g.load(self.h);
-        let target = ConductionTarget::load(g, self.norm, inv_hi, self.rho, &self.c);
+        let target = ConductionTarget::load(g, self.norm, inv_hi, self.rho, self.m, &self.c);
         (inv_hi, target, F64s::splat(0.0))
     }
 
@@ -217,85 +290,6 @@ impl<K: Kernel> PairStage for Conduction<'_, K> {
     fn finish(&self, _: &Group, (_, _, sum): Self::Sums, [du]: &mut Self::Out<'_>) {
         let add = (self.c.alpha_u * sum).to_array();
         for (d, a) in du.iter_mut().zip(add) {
-            *d += a;
-        }
-    }
-}
-
-/// The conduction under block time steps, exchanged as impulses
-/// (`docs/block-timesteps.md`, "Conduction as impulses"): each pair's
-/// flux is integrated over the shorter of its two steps and given to both
-/// partners at once, at the kick of the one whose step starts now. A pair
-/// of particles that start their steps together exchanges over the
-/// shorter step on both sides; a target that starts its step now against
-/// a partner inside its own (longer) step takes the pair over the
-/// target's step, and the partner, a target of the receivers' pass,
-/// takes the same term over the same step. Each pair's two impulses are
-/// one antisymmetric term times one step: energy is conserved to
-/// round-off whatever the steps, which a rate held over each particle's
-/// own step is not.
-pub(crate) struct ConductionImpulses<'a, K> {
-    pub(crate) kernel: &'a K,
-    pub(crate) h: &'a [f64],
-    pub(crate) m: &'a [f64],
-    pub(crate) rho: &'a [f64],
-    pub(crate) c: Conductivity<'a>,
-    /// Per local particle: the step it starts now or is inside.
-    pub(crate) step: &'a [f64],
-    /// Per local particle: 1 where its step starts now, else 0.
-    pub(crate) starts: &'a [f64],
-    /// Set to 0 for every partner inside its step (the receivers) met by
-    /// a target; `None` in the receivers' pass.
-    pub(crate) receivers: Option<&'a [AtomicU8]>,
-}
-
-impl<K: Kernel> PairStage for ConductionImpulses<'_, K> {
-    /// `1/h`, the conduction's side of the targets, their steps, whether
-    /// they start now, the sum.
-    type Sums = (F64s, ConductionTarget, F64s, F64s, F64s);
-    type Out<'o> = [&'o mut [f64]; 1];
-    type Stats = ();
-
-    #[inline(always)]
-    fn start(&self, g: &Group) -> Self::Sums {
-        let inv_hi = 1.0 / g.load(self.h);
-        let target = ConductionTarget::load(g, self.kernel.norm(), inv_hi, self.rho, &self.c);
-        let (step, starts) = (g.load(self.step), g.load(self.starts));
-        (inv_hi, target, step, starts, F64s::splat(0.0))
-    }
-
-    #[inline(always)]
-    fn pair(&self, s: &mut Self::Sums, j: usize, _: [F64s; 3], r2: F64s) {
-        let (inv_hi, target, step_i, starts_i, sum) = s;
-        let step_j = F64s::splat(self.step[j]);
-        // Targets that start now (1) and the receivers (0).
-        let weight = if self.starts[j] != 0.0 {
-            let shorter = step_i.min(step_j);
-            *starts_i * shorter + (1.0 - *starts_i) * step_j
-        } else {
-            if let Some(r) = self.receivers {
-                if r[j].load(Ordering::Relaxed) != 0 {
-                    r[j].store(0, Ordering::Relaxed);
-                }
-            }
-            *starts_i * *step_i
-        };
-        let c = &self.c;
-        let dw = target.mean_derivative(
-            self.kernel,
-            self.kernel.norm(),
-            r2,
-            *inv_hi,
-            1.0 / self.h[j],
-        );
-        let m_j = F64s::splat(self.m[j]);
-        *sum += target.term(m_j, dw, self.rho[j], c.p[j], c.u[j]) * weight;
-    }
-
-    #[inline(always)]
-    fn finish(&self, _: &Group, s: Self::Sums, [out]: &mut Self::Out<'_>) {
-        let add = (self.c.alpha_u * s.4).to_array();
-        for (d, a) in out.iter_mut().zip(add) {
             *d += a;
         }
     }

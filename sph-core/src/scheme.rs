@@ -123,7 +123,7 @@ pub const PRESETS: [(&str, Scheme, &str); 10] = [
     (
         "gas",
         Scheme::GAS,
-        "issue 42's one scheme for the ideal-gas cases (the default of noh, sod, gresho, wind-shock and scenes of your own): `best` with AV cleaning, switches that rise to alpha 2 at weak shocks (0.4 at strong ones) and conductivity 2 weighted by each pair's contrast of u",
+        "issue 42's one scheme for the ideal-gas cases (the default of sedov, noh, sod, gresho, wind-shock and scenes of your own): `best` with AV cleaning, switches that rise to alpha 2 at weak shocks (0.4 at strong ones) and conductivity 2 weighted by each pair's contrast of u",
     ),
     (
         "paper",
@@ -257,9 +257,9 @@ impl Scheme {
     };
 
     /// One scheme for every ideal-gas case, issue 42's (the default of
-    /// `noh`, `sod`, `gresho`, `wind-shock` and scenes of your own; Sedov,
-    /// Kelvin-Helmholtz, the isobaric cube and Evrard keep their own until
-    /// it meets their bounds): [`Scheme::BEST`] with AV cleaning (shear
+    /// `sedov`, `noh`, `sod`, `gresho`, `wind-shock` and scenes of your
+    /// own; Kelvin-Helmholtz, the isobaric cube and Evrard keep their own
+    /// until it meets their bounds): [`Scheme::BEST`] with AV cleaning (shear
     /// and smooth flows keep their kinetic energy: Gresho, Kelvin-Helmholtz),
     /// switches whose ceiling rises from 0.4 at strong shocks (Noh's and
     /// Sedov's, into cold gas; 0.5 thins Noh's plateau by 3.5%) to 2 at

@@ -579,6 +579,7 @@ fn forces(s: &mut Setup, gradients: Gradients, alpha: Option<&[f64]>) {
         az: &mut p.az,
         du: &mut p.du,
         criteria: None,
+        impulse: None,
     };
     let mut factors = PairFactors::default();
     factors.fill(&state);

@@ -238,12 +238,12 @@ type Tweak = fn(&mut Scheme);
 /// (cleaning or Balsara with one constant alpha computes div v); those
 /// stay with the stages, and the particles pass their own checks.
 /// Measured over 8 sub-steps of this blast (u from 1e-4 to 100 over 3
-/// lattice spacings), 2026-12-06: drift 7e-5 to 2.8e-3 (`ve`, no
+/// lattice spacings), 2026-12-06: drift 6e-5 to 2.8e-3 (`ve`, no
 /// conduction; 1.4e-3 under global steps), every scheme with conduction
-/// 1.6e-4 to 1.8e-3 since it is exchanged as impulses (before: 5e-3 to
+/// 6e-5 to 6.5e-4 since it is exchanged as impulses (before: 5e-3 to
 /// 1.7e-2 with alpha_u = 1, 4.0e-2 with alpha_u = 3, the `evrard`
-/// preset), so 5e-3 bounds them all; "nothing moved" fails a frozen run
-/// (docs/block-timesteps.md).
+/// preset, now 1.1e-4), so 5e-3 bounds them all; "nothing moved" fails a
+/// frozen run (docs/block-timesteps.md).
 #[test]
 fn every_preset_and_variant_runs_block_steps() {
     let variants: [(&str, Tweak); 4] = [

@@ -297,6 +297,7 @@ fn compute_forces_conducting(
         az: &mut p.az,
         du: &mut p.du,
         criteria: None,
+        impulse: None,
     };
     let n = state.rho.len();
     let mut grad: Vec<Vec<f64>> = match cleaning {
@@ -335,6 +336,7 @@ fn compute_forces_conducting(
             p: &p.p,
             u: &p.u,
             contrast,
+            impulses: None,
         }),
     };
     momentum_energy_with(&kernel(), &s.bbox, state, &factors, scheme, &s.list, rates);

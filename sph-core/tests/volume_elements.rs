@@ -261,6 +261,7 @@ fn forces_with(s: &mut Setup, alpha: Alpha<'_>, volume: Volume, gradients: Gradi
         az: &mut p.az,
         du: &mut p.du,
         criteria: None,
+        impulse: None,
     };
     momentum_energy_with(&kernel(), &s.bbox, state, &f, scheme, &s.list, rates);
 }

@@ -598,6 +598,48 @@ impl<C: Communicator> Domain<C> {
         &mut self,
         field: &mut [T],
     ) -> Result<(), DomainError> {
+        self.exchange_reverse_with(field, |own, v| {
+            if v < *own {
+                *own = v;
+            }
+        })
+    }
+
+    /// As [`exchange_reverse_min`](Self::exchange_reverse_min), each
+    /// owner combining the halos' values into its own with `combine`
+    /// (peers in the order of their messages: `combine` must not depend
+    /// on it, as a minimum or an integer sum does not). Collective.
+    ///
+    /// ```
+    /// use sph_comm::{run_ranks, Communicator};
+    /// use sph_domain::{Domain, DomainConfig, Points};
+    /// use sph_tree::{Boundary, BoundingBox};
+    ///
+    /// // Every copy of a particle adds 1: each owner counts its copies.
+    /// let sums = run_ranks(2, |comm| {
+    ///     let mut cloud = Points::default();
+    ///     for i in (comm.rank() as u64..1000).step_by(2) {
+    ///         let f = |k: u64| ((i * k) % 1000) as f64 / 1000.0;
+    ///         cloud.push(i, [f(7), f(13), f(31)], 0.05);
+    ///     }
+    ///     let mut bbox = BoundingBox::cube(0.0, 1.0, Boundary::Periodic).unwrap();
+    ///     let mut domain = Domain::new(&comm, DomainConfig::default()).unwrap();
+    ///     let owned = domain.sync(&mut cloud, &mut bbox).unwrap();
+    ///     let mut copies = vec![1i64; cloud.id.len()];
+    ///     domain.exchange_reverse_with(&mut copies, |own, v| *own += v).unwrap();
+    ///     let owned_sum: i64 = copies[owned.clone()].iter().sum();
+    ///     (owned_sum, cloud.id.len())
+    /// });
+    /// // Every local copy, owned or halo, is counted once on its owner.
+    /// let counted: i64 = sums.iter().map(|s| s.0).sum();
+    /// let copies: usize = sums.iter().map(|s| s.1).sum();
+    /// assert_eq!(counted as usize, copies);
+    /// ```
+    pub fn exchange_reverse_with<T: Plain>(
+        &mut self,
+        field: &mut [T],
+        combine: impl Fn(&mut T, T),
+    ) -> Result<(), DomainError> {
         if self.comm.size() == 1 {
             return Ok(());
         }
@@ -629,10 +671,7 @@ impl<C: Communicator> Domain<C> {
                 });
             }
             for (&i, &v) in peer.send.iter().zip(buf.iter()) {
-                let own = &mut field[i as usize];
-                if v < *own {
-                    *own = v;
-                }
+                combine(&mut field[i as usize], v);
             }
         }
         Ok(())

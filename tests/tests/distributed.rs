@@ -41,8 +41,8 @@ const SIZES: [(&str, usize, u64); 13] = [
     // Block time steps (the paper's scheme): 30 sub-steps over bins 45-49
     // of a line to 0.05.
     ("sedov-block", 24, 30),
-    // Block steps with switches, volume elements and conduction (best,
-    // Sedov's own scheme).
+    // Block steps with switches, volume elements and conduction (`best`;
+    // Sedov's own, `gas`, runs block steps in `sedov`).
     ("sedov-best-block", 24, 30),
     // Block steps with self-gravity: 30 sub-steps of a line to t = 1.
     ("evrard-block", 16, 30),
@@ -122,7 +122,7 @@ fn main() {
     }
 }
 
-/// `scheme` in place of Sedov's own (`best`).
+/// `scheme` in place of Sedov's own (`gas`).
 fn preset(scheme: sph_core::Scheme) -> cases::SchemeOverrides {
     cases::SchemeOverrides {
         preset: Some(scheme),
@@ -148,11 +148,12 @@ fn scene(case: &str) -> Scene {
         return s;
     }
     if case == "sedov-block" || case == "sedov-best-block" {
-        let mut s = if case == "sedov-best-block" {
-            sph_validation::scene("sedov", side)
+        let scheme = if case == "sedov-best-block" {
+            sph_core::Scheme::BEST
         } else {
-            sph_validation::scene_with("sedov", side, &preset(sph_core::Scheme::PAPER))
+            sph_core::Scheme::PAPER
         };
+        let mut s = sph_validation::scene_with("sedov", side, &preset(scheme));
         s.config.time_steps = sph_core::TimeSteps::Block;
         s.config.timestep.first_step = sph_core::timestep::FirstStep::Criteria;
         return s;

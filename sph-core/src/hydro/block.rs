@@ -116,19 +116,10 @@ pub(super) struct BlockState {
 }
 
 impl BlockState {
-    /// Owned particle `i` (`k` from the first owned)'s bin from now on and
-    /// whether it starts a step now, once [`Hydro::new_bins`] has chosen:
-    /// the bin the kick gives it.
-    pub(super) fn bin_from_now(&self, p: &Particles, i: usize, k: usize) -> (Bin, bool) {
-        let woken = self
-            .wake
-            .get(i)
-            .map_or(u8::MAX, |w| w.load(Ordering::Relaxed));
-        if self.active[k] {
-            (Bin(self.new_bin[k].min(woken)), true)
-        } else {
-            (Bin(bin_of(p.bin[i]).0.min(woken)), false)
-        }
+    /// Whether owned particle `k` (from the first owned) starts a step
+    /// at this sub-step.
+    pub(super) fn is_active(&self, k: usize) -> bool {
+        self.active[k]
     }
 
     /// Each local particle's time since its last update (its own step;
@@ -140,7 +131,7 @@ impl BlockState {
 
 /// A particle's bin, stored as an exact `f64` in `Particles::bin`.
 #[inline]
-fn bin_of(stored: f64) -> Bin {
+pub(super) fn bin_of(stored: f64) -> Bin {
     Bin(stored as u8)
 }
 
@@ -349,7 +340,9 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         clock.lap(Stage::Density);
         // The EOS covers every owned particle: the active ones from their
         // new density, the others from their predicted density and u.
+        self.prepare_impulses(p, &line, owned.clone(), self.block.ti)?;
         self.thermo_and_forces(p, bbox, owned.clone(), step, &mut clock)?;
+        self.gather_impulses(owned.clone())?;
         self.swap_held_buffers(p);
         if first {
             // Adams-Bashforth needs du_{n-1}; the first step uses du_0.
@@ -413,9 +406,8 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         };
         let line = next;
         self.new_bins(p, bbox, &line, owned.clone(), ti, first)?;
-        self.conduction_impulses(p, bbox, &line, owned.clone())?;
         let fallbacks = self.kick(p, &line, owned.clone(), ti, first, step)?
-            + self.apply_conduction_impulses(p, owned.clone());
+            + self.apply_impulses(p, owned.clone());
         let (next, limit) = self.next_tick(p, owned.clone(), ti);
         clock.lap(Stage::Timestep);
 

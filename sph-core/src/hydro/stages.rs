@@ -6,7 +6,7 @@ use crate::av_switch::{
     balsara, iad_and_velocity_divergence, update_alpha_over, velocity_divergence, Elapsed,
     FlowState,
 };
-use crate::conduction::Conductivity;
+use crate::conduction::{Conductivity, ImpulseWeights};
 use crate::density::{density, pressure_energy_density, ve_density, xmass, Positions, VeOut};
 use crate::iad::iad_volumes;
 use crate::integrate::HUpdate;
@@ -195,12 +195,27 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
                 compression: comp,
             }
         });
+        // On the time line the conduction is exchanged as impulses
+        // (`block_conduction.rs`), outside `du`.
+        let imp = &mut self.impulses;
+        let (weights, impulse) = if block && self.config.scheme.conductivity.is_some() {
+            let w = ImpulseWeights {
+                since: &imp.since,
+                starts: &imp.starts,
+                gains: &imp.gains,
+                inv_quantum: imp.inv_quantum,
+            };
+            (Some(w), Some(imp.du.as_mut_slice()))
+        } else {
+            (None, None)
+        };
         let rates = Rates {
             ax: &mut p.ax,
             ay: &mut p.ay,
             az: &mut p.az,
             du: &mut p.du,
             criteria,
+            impulse,
         };
         let s = self.config.scheme;
         let alpha = if s.balsara {
@@ -223,17 +238,13 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             stress: s
                 .artificial_stress
                 .map(|e| ArtificialStress::new(e, self.config.neighbors.ng0, &self.kernel)),
-            // On the time line the conduction is exchanged as impulses
-            // at the kicks (`block_conduction.rs`), outside `du`.
-            conduction: s
-                .conductivity
-                .filter(|_| !block)
-                .map(|alpha_u| Conductivity {
-                    alpha_u,
-                    p: &p.p,
-                    u: &p.u,
-                    contrast: s.conduction_contrast,
-                }),
+            conduction: s.conductivity.map(|alpha_u| Conductivity {
+                alpha_u,
+                p: &p.p,
+                u: &p.u,
+                contrast: s.conduction_contrast,
+                impulses: weights,
+            }),
         };
         let (k, f, list) = (&self.kernel, &self.buf.factors, &self.list);
         momentum_energy_with(k, bbox, state, f, scheme, list, rates)

@@ -70,6 +70,9 @@ pub struct Rates<'a> {
     pub du: &'a mut [f64],
     /// Each target's own time-step inputs, where asked for.
     pub criteria: Option<Criteria<'a>>,
+    /// The conduction's impulse of `u` (alpha_u times the weighted sum)
+    /// where [`Conductivity::impulses`] asks for it; required then.
+    pub impulse: Option<&'a mut [f64]>,
 }
 
 /// Each target's own time-step inputs ([`TimestepParams::particle_dt`](crate::timestep::TimestepParams::particle_dt)),
@@ -255,7 +258,8 @@ impl<'a> MomentumScheme<'a> {
 /// this is the paper's form.
 ///
 /// # Panics
-/// If the state's arrays (or `alpha`, `xm`) do not cover the lists.
+/// If the state's arrays (or `alpha`, `xm`, the conduction's impulse
+/// weights) do not cover the lists, or impulses have no output.
 pub fn momentum_energy_with<K: Kernel>(
     kernel: &K,
     bbox: &BoundingBox,
@@ -275,6 +279,16 @@ pub fn momentum_energy_with<K: Kernel>(
     }
     if let Some(x) = scheme.volumes.elements() {
         assert!(x.len() >= n, "X has {} values for {n} particles", x.len());
+    }
+    if let Some(w) = scheme.conduction.and_then(|c| c.impulses) {
+        assert!(
+            out.impulse.is_some(),
+            "conduction impulses need Rates::impulse"
+        );
+        assert!(
+            w.since.len() >= n && w.starts.len() >= n && w.gains.len() >= n,
+            "conduction impulses: since, starts and gains must cover the {n} particles"
+        );
     }
     let run = MomentumRun {
         kernel,
@@ -365,9 +379,9 @@ impl<'a, K: Kernel> MomentumRun<'a, K> {
                 &mut o.ax[r.clone()],
                 &mut o.ay[r.clone()],
                 &mut o.az[r.clone()],
-                &mut o.du[r],
+                &mut o.du[r.clone()],
             ],
-            criteria,
+            (criteria, o.impulse.map(|d| [&mut d[r]])),
         );
         let stage = Momentum::<K, IAD, S, F, W> {
             flow: Flow::new(self.kernel, &flow_state, IAD),

@@ -83,7 +83,10 @@ where
     type Sums = (Targets<W::Target>, Sums);
     /// `a`, `du/dt`, and where asked for each target's `h / v_sig` and
     /// compression.
-    type Out<'o> = ([&'o mut [f64]; 4], Option<[&'o mut [f64]; 2]>);
+    type Out<'o> = (
+        [&'o mut [f64]; 4],
+        (Option<[&'o mut [f64]; 2]>, Option<[&'o mut [f64]; 1]>),
+    );
     type Stats = MomentumStats;
 
     #[inline(always)]
@@ -115,9 +118,9 @@ where
             stress: self.stress.map_or(zero, |s| s.target(pre)),
             grad_v: self.cleaning.map_or([zero; 6], |cl| cl.target(g)),
             weights: self.weights.target(g),
-            cond: self
-                .conduction
-                .map(|c| ConductionTarget::load(g, self.flow.norm, inv_h, self.flow.rho, &c)),
+            cond: self.conduction.map(|c| {
+                ConductionTarget::load(g, self.flow.norm, inv_h, self.flow.rho, self.flow.m, &c)
+            }),
         };
         let sums = Sums {
             a: [zero; 3],
@@ -187,7 +190,8 @@ where
         };
         if let (Some(c), Some(ci)) = (&self.conduction, &t.cond) {
             let (rho_j, p_j, u_j) = (self.flow.rho[j], c.p[j], c.u[j]);
-            acc.cond += ci.term(mj, dw_mean, rho_j, p_j, u_j);
+            let term = ci.term(mj, dw_mean, rho_j, p_j, u_j);
+            acc.cond += ci.weigh(c, j, self.flow.m[j], term);
         }
         let vi = t.v;
         let vij = [
@@ -232,14 +236,18 @@ where
 
     #[inline(always)]
     fn finish(&self, g: &Group, (t, acc): Self::Sums, out: &mut Self::Out<'_>) -> MomentumStats {
-        let ([ax, ay, az, du], criteria) = out;
+        let ([ax, ay, az, du], (criteria, impulse)) = out;
         acc.a[0].store(ax);
         acc.a[1].store(ay);
         acc.a[2].store(az);
         let du_i = t.pre * acc.ep + 0.5 * acc.eav;
-        match self.conduction {
-            Some(c) => (du_i + c.alpha_u * acc.cond).store(du),
-            None => du_i.store(du),
+        match (self.conduction, impulse) {
+            (Some(c), Some([impulse])) if c.impulses.is_some() => {
+                du_i.store(du);
+                (c.alpha_u * acc.cond).store(impulse);
+            }
+            (Some(c), _) => (du_i + c.alpha_u * acc.cond).store(du),
+            (None, _) => du_i.store(du),
         }
         let vsig = F::vsig_finish(acc.vsig, t.c);
         let h_over_vsig = (1.0 / (t.inv_h * vsig)).to_array();
