@@ -123,7 +123,7 @@ pub const PRESETS: [(&str, Scheme, &str); 10] = [
     (
         "gas",
         Scheme::GAS,
-        "issue 42's one scheme for the ideal-gas cases (the default of sedov, noh, sod, gresho, wind-shock and scenes of your own): `best` with AV cleaning, switches that rise to alpha 2 at weak shocks (0.4 at strong ones) and conductivity 2 weighted by each pair's contrast of u",
+        "issue 42's one scheme for the ideal-gas cases (the default of sedov, noh, sod, gresho, kelvin-helmholtz, wind-shock and scenes of your own): `best` with AV cleaning, switches that rise to alpha 2 at weak shocks (0.4 at strong ones) and conductivity 2 weighted by each pair's contrast of u",
     ),
     (
         "paper",
@@ -153,7 +153,7 @@ pub const PRESETS: [(&str, Scheme, &str); 10] = [
     (
         "shear",
         Scheme::SHEAR,
-        "shear layers: the paper's IAD and grad-h, viscosity switches in [0.05, 1], AV cleaning after SPH-EXA's (the Kelvin-Helmholtz case's)",
+        "shear layers: the paper's IAD and grad-h, viscosity switches in [0.05, 1], AV cleaning after SPH-EXA's (the Kelvin-Helmholtz case's until 2026-12-07)",
     ),
     (
         "contact",
@@ -257,8 +257,8 @@ impl Scheme {
     };
 
     /// One scheme for every ideal-gas case, issue 42's (the default of
-    /// `sedov`, `noh`, `sod`, `gresho`, `wind-shock` and scenes of your
-    /// own; Kelvin-Helmholtz, the isobaric cube and Evrard keep their own
+    /// `sedov`, `noh`, `sod`, `gresho`, `kelvin-helmholtz`, `wind-shock`
+    /// and scenes of your own; the isobaric cube and Evrard keep their own
     /// until it meets their bounds): [`Scheme::BEST`] with AV cleaning (shear
     /// and smooth flows keep their kinetic energy: Gresho, Kelvin-Helmholtz),
     /// switches whose ceiling rises from 0.4 at strong shocks (Noh's and
@@ -282,13 +282,14 @@ impl Scheme {
         ..Scheme::BEST
     };
 
-    /// The `kelvin-helmholtz` case's scheme: the paper's (IAD, grad-h)
+    /// Shear layers (the `kelvin-helmholtz` case's scheme until
+    /// 2026-12-07, when it moved to [`Scheme::GAS`]): the paper's (IAD, grad-h)
     /// with viscosity switches (alpha in [0.05, 1]) and the AV cleaning
     /// after SPH-EXA's ([`AvCleaning`](crate::momentum::AvCleaning)), which
     /// leaves a shear layer's linear velocity profile undamped.
-    /// Kelvin-Helmholtz M(1.5) (reference 0.1479): 0.066 at 32^2 x 8 and
-    /// 0.117 at 64^2 x 8; `ve`: 0.017 and 0.046, `ve` with cleaning 0.053
-    /// and 0.109.
+    /// Kelvin-Helmholtz M(1.5) (reference 0.1479), global steps: 0.066 at
+    /// 32^2 x 8 and 0.117 at 64^2 x 8 (block steps, 2026-12-07: 0.0775 and
+    /// 0.1117); `ve`: 0.017 and 0.046, `ve` with cleaning 0.053 and 0.109.
     pub const SHEAR: Scheme = Scheme {
         viscosity: Viscosity::Switched(AvSwitchParams::DEFAULT),
         av_cleaning: true,

@@ -1,6 +1,8 @@
 //! Kelvin-Helmholtz instability (McNally et al. 2012 set-up), 32 x 32 x 8
-//! particles, to t = 1.5, with the case's scheme (`shear`: the paper's with
-//! viscosity switches and the AV cleaning): the seeded mode must grow.
+//! particles, to t = 1.5, with the case's scheme (`gas` since 2026-12-07,
+//! `shear` before: both with viscosity switches and the AV cleaning): the
+//! seeded mode must grow. `gas`: M(1.5) 0.0803 global and 0.0718 block at
+//! 32^2 x 8, 0.1137 block at 64^2 x 8 (`docs/schemes.md`, 2026-12-07).
 //!
 //! Measured M(1.5) (2 threads; seed 0.01, McNally's converged reference
 //! 0.1479): `shear` 0.066 at 32^2 x 8 and 0.117 at 64^2 x 8; `ve` 0.017
@@ -22,7 +24,7 @@ fn kelvin_helmholtz_mode_grows() {
 
 /// The same checks under block time steps (issue 41), with the velocity
 /// gradients of the cleaning and the switches' divergence held by
-/// inactive particles. Measured (2026-12-05): M(1.5) 0.0606 at 32^2 x 8
+/// inactive particles. Measured with `shear` (2026-12-05): M(1.5) 0.0606 at 32^2 x 8
 /// (global 0.0655) with 0.98x the global run's particle updates, energy
 /// drift 9.4e-5, momentum 3.5e-5; at 64^2 x 8 M(1.5) 0.103 (global
 /// 0.117), momentum 1.4e-5 (global 1e-16: only block steps' inactive
