@@ -224,6 +224,19 @@ pub fn relax(
     tolerance: f64,
     mut progress: impl FnMut(RelaxStep),
 ) -> Result<Glass, AppError> {
+    relax_reporting_to(spec, max_steps, tolerance, &mut progress)
+}
+
+/// [`relax`] with the observer behind a pointer: this body (and the solver
+/// it drives) is compiled once, here, instead of once more in every crate
+/// that passes its own closure (optimised builds share no generic code
+/// between crates).
+fn relax_reporting_to(
+    spec: &GlassSpec,
+    max_steps: u64,
+    tolerance: f64,
+    progress: &mut dyn FnMut(RelaxStep),
+) -> Result<Glass, AppError> {
     spec.check()?;
     let n = spec.side.pow(3);
     let spacing = 1.0 / spec.side as f64;

@@ -200,6 +200,22 @@ impl Simulation {
     pub fn new(scene: Scene, kernel: FastKernel, kernel_name: String) -> Result<Self, AppError> {
         Simulation::with_comm(scene, kernel, kernel_name, SerialComm::new())
     }
+
+    /// [`Simulation::run`] of the serial pipeline, compiled once, here: a
+    /// crate that calls this links the solver instead of compiling its own
+    /// copy of it, as a call of the generic `run` would make it do
+    /// (optimised builds share no generic code between crates).
+    ///
+    /// # Errors
+    /// As [`Simulation::run`].
+    pub fn run_serial(
+        &mut self,
+        stop: Stop,
+        out: &Path,
+        progress: Progress,
+    ) -> Result<Summary, AppError> {
+        self.run(stop, out, progress)
+    }
 }
 
 impl<C: Communicator> Simulation<C> {

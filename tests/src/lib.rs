@@ -63,7 +63,8 @@ pub fn run(scene: Scene, stop: Stop, out: &std::path::Path) -> Summary {
     let kernel: FastKernel = KernelChoice::default().fast().expect("default kernel");
     let mut sim = Simulation::new(scene, kernel, KernelChoice::default().to_string())
         .expect("simulation set-up");
-    sim.run(stop, out, Progress::Quiet).expect("run completes")
+    sim.run_serial(stop, out, Progress::Quiet)
+        .expect("run completes")
 }
 
 /// As [`run`], also writing `particles.csv` (the final state) to `out`.
@@ -72,7 +73,8 @@ pub fn run_writing_particles(scene: Scene, stop: Stop, out: &std::path::Path) ->
     let mut sim = Simulation::new(scene, kernel, KernelChoice::default().to_string())
         .expect("simulation set-up");
     sim.set_write_particles(true);
-    sim.run(stop, out, Progress::Quiet).expect("run completes")
+    sim.run_serial(stop, out, Progress::Quiet)
+        .expect("run completes")
 }
 
 /// Columns of `particles.csv` in `dir`, by header name.

@@ -1,8 +1,8 @@
 //! The isobaric cube (rho 8 inside, 1 outside, P = 2.5, periodic) to
 //! t = 1 (two sound crossings of the box in the thin gas), with the case's
 //! scheme (`contact`: pressure-energy volumes, kernel gradients), at 16
-//! and 32 thin particles per side (7,680 and 61,440 particles), and with
-//! the paper's scheme at 16, which must fail.
+//! and 32 thin particles per side (7,680 and 61,440 particles; global time
+//! steps at 16 only), and with the paper's scheme at 16, which must fail.
 //!
 //! The exact solution is the initial state: the checks are how far the run
 //! strays from it. The lattices' contact launches waves that fill the box
@@ -148,9 +148,15 @@ fn run(
     (mean, last, core / n_core as f64, far / n_far as f64)
 }
 
+/// Global time steps at 16 only: the default, block steps (the next
+/// test), holds both bounds and the convergence from 16 to 32; the global
+/// run at 32 (as much work as the rest of this file) was cut to keep CI
+/// inside its time (2026-12-07; it measured 0.0170).
 #[test]
 fn isobaric_cube_stays_put() {
-    stays_put(TimeSteps::Global, 1e-12);
+    let (coarse, _, core, far) = run(16, None, TimeSteps::Global, 1e-12);
+    assert!(coarse < BOUND_16, "mean v_rms / c = {coarse} at 16");
+    check_densities(core, far);
     // A scheme known to be noisy at the contact fails the bound.
     let (paper, _, _, _) = run(16, Some(("paper", Scheme::PAPER)), TimeSteps::Global, 1e-12);
     assert!(
@@ -181,6 +187,11 @@ fn stays_put(time_steps: TimeSteps, momentum: f64) {
         fine < 0.9 * coarse,
         "no convergence: {coarse} at 16, {fine} at 32"
     );
+    check_densities(core, far);
+}
+
+/// The core keeps its density 8 and the thin gas its 1, within 5%.
+fn check_densities(core: f64, far: f64) {
     assert!((core / 8.0 - 1.0).abs() < 0.05, "core density {core}");
     assert!((far - 1.0).abs() < 0.05, "thin gas density {far}");
 }

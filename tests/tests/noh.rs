@@ -2,7 +2,7 @@
 //! cases' default since 2026-12-06: viscosity switches up to alpha = 0.4
 //! at shocks into cold gas, AV cleaning, conduction across contrasts of
 //! u), at two resolutions: spheres cut from 37^3 and 44^3 lattices (26,745
-//! and 44,720 particles). The figures of the `noh` preset (kernel
+//! and 44,720 particles; global time steps at 37^3 only). The figures of the `noh` preset (kernel
 //! gradients, switches up to 0.7), the case's scheme before, follow each
 //! `gas` figure in brackets; the bounds were set on it.
 //!
@@ -101,16 +101,18 @@ fn run(side: usize, time_steps: sph_core::TimeSteps) -> (Summary, [f64; 3], [f64
     (s, l1, null)
 }
 
+/// Global time steps at 37^3 only: the default, block steps (the next
+/// test), holds the bounds at both resolutions, and the global run at
+/// 44^3 (35 M particle updates, half of this file's work) was cut to keep
+/// CI inside its time (2026-12-07; it measured 16.01 / 7.22 / 0.230).
 #[test]
-fn noh_reaches_the_plateau_at_two_resolutions() {
-    for side in [37, 44] {
-        let (s, l1, null) = run(side, sph_core::TimeSteps::Global);
-        check(side, &s, l1, null, 1e-12);
-    }
+fn noh_reaches_the_plateau_under_global_time_steps() {
+    let (s, l1, null) = run(37, sph_core::TimeSteps::Global);
+    check(37, &s, l1, null, 1e-12);
 }
 
-/// The same under block time steps (issue 41), at the same bounds but
-/// momentum: a pair's two forces are evaluated at different times, so it
+/// Block time steps (issue 41, the default) at both resolutions, at the
+/// same bounds but momentum: a pair's two forces are evaluated at different times, so it
 /// holds to 1e-6 (measured 2.7e-8 and 6.7e-8 with `noh`). Measured with
 /// `gas` (2026-12-06): plateau 118.1 / 116.4 (-2.6% / -4.5%), shock
 /// 0.1006 / 0.1030, L1 near the shock 20.17 / 9.48 / 0.280 and 17.19 /
