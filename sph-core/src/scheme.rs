@@ -123,7 +123,7 @@ pub const PRESETS: [(&str, Scheme, &str); 10] = [
     (
         "gas",
         Scheme::GAS,
-        "issue 42's one scheme for the ideal-gas cases (the default of sedov, noh, sod, gresho, kelvin-helmholtz, wind-shock and scenes of your own): `best` with AV cleaning, switches that rise to alpha 2 at weak shocks (0.4 at strong ones) and conductivity 2 weighted by each pair's contrast of u",
+        "issue 42's one scheme for the ideal-gas cases (`sphexa cases` lists those it is the default of; scenes of your own run it too): `best` with AV cleaning, switches that rise to alpha 2 at weak shocks (0.4 at strong ones) and conductivity 2 weighted by each pair's contrast of u",
     ),
     (
         "paper",
@@ -256,9 +256,9 @@ impl Scheme {
         ..Scheme::VE_AC
     };
 
-    /// One scheme for every ideal-gas case, issue 42's (the default of
-    /// `sedov`, `noh`, `sod`, `gresho`, `kelvin-helmholtz`, `wind-shock`
-    /// and scenes of your own; the isobaric cube and Evrard keep their own
+    /// One scheme for every ideal-gas case, issue 42's (the default of most
+    /// of them and of scenes of your own: each case's `default_scheme`, as
+    /// `sphexa cases` lists it; the isobaric cube and Evrard keep their own
     /// until it meets their bounds): [`Scheme::BEST`] with AV cleaning (shear
     /// and smooth flows keep their kinetic energy: Gresho, Kelvin-Helmholtz),
     /// switches whose ceiling rises from 0.4 at strong shocks (Noh's and
