@@ -53,7 +53,7 @@ const SIZES: [(&str, usize, u64); 13] = [
     // Block steps with driving: kept stirring accelerations migrate, the
     // driving's net force and work are exact sums (from rest every
     // particle takes the same step: sub-steps where part of a stirred gas
-    // is active are checked across ranks in sph-core/tests/stirred.rs).
+    // is active are checked across ranks in sph-core/tests/integration/stirred.rs).
     ("turbulence-block", 16, 30),
     ("square-patch", 20, 20),
     ("noh", 20, 20),

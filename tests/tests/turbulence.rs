@@ -20,7 +20,7 @@
 //! - **Input**: the work W itself against the driving's analytic input,
 //!   the free-particle work of its own random field path, while the gas
 //!   has not yet moved through the field (below); a frozen field's
-//!   `t^2 / 2 sum m |a|^2` is checked in `sph-core/tests/stirred.rs`.
+//!   `t^2 / 2 sum m |a|^2` is checked in `sph-core/tests/integration/stirred.rs`.
 //! - **Momentum**: the driving's mean is removed with exact sums, so the
 //!   net momentum stays at round-off: below 1e-13 of `M * 0.3 * c`
 //!   (measured ~1e-17).

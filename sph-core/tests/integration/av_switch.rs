@@ -3,7 +3,7 @@
 //! exponential decay of alpha, its bounds, and momentum conservation with
 //! per-particle alpha.
 
-mod common;
+use crate::common;
 
 use proptest::prelude::*;
 use sph_core::av_switch::{

@@ -1,7 +1,7 @@
 //! Property tests of the SPH stages: exactness of IAD, conservation by the
 //! pairwise forces, lattice density, integrator reversibility.
 
-mod common;
+use crate::common;
 
 use proptest::prelude::*;
 use sph_core::av_switch::{velocity_divergence, FlowState};

@@ -4,7 +4,7 @@
 //! pressure work of linear fields, against the exact `-grad P / rho` and
 //! `-(P / rho) div v`.
 
-mod common;
+use crate::common;
 
 use proptest::prelude::*;
 use sph_core::density::{density, pressure_energy_density, ve_density, xmass, Positions, VeOut};
