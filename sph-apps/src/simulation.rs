@@ -218,6 +218,23 @@ impl Simulation {
     }
 }
 
+#[cfg(feature = "mpi")]
+impl Simulation<sph_comm::MpiComm> {
+    /// [`Simulation::run`] on MPI ranks, compiled once, here (as
+    /// [`Simulation::run_serial`]).
+    ///
+    /// # Errors
+    /// As [`Simulation::run`].
+    pub fn run_mpi(
+        &mut self,
+        stop: Stop,
+        out: &Path,
+        progress: Progress,
+    ) -> Result<Summary, AppError> {
+        self.run(stop, out, progress)
+    }
+}
+
 impl<C: Communicator> Simulation<C> {
     /// Assembles the pipeline on one rank of `comm`. Each rank passes its
     /// share of the scene ([`Case::setup_share`](crate::cases::Case::setup_share)

@@ -24,7 +24,7 @@ use sph_apps::cases::{self, Scene};
 use sph_apps::simulation::{Progress, Stop};
 use sph_apps::Simulation;
 use sph_comm::launch::Launcher;
-use sph_comm::{Communicator, MpiComm, SerialComm};
+use sph_comm::{Communicator, MpiComm};
 use sph_kernels::{FastKernel, KernelChoice};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -201,13 +201,13 @@ fn child(mode: &str, case: &str, out: &Path, threads: usize) {
         let mut sim = Simulation::with_comm(scene(case), kernel, name, comm).expect("set-up");
         sim.set_write_particles(true);
         sim.set_time_line_end(line_end(case));
-        sim.run(Stop::Steps(steps), out, Progress::Quiet)
+        // The non-generic runs: the solver is not compiled again here.
+        sim.run_mpi(Stop::Steps(steps), out, Progress::Quiet)
     } else {
-        let mut sim =
-            Simulation::with_comm(scene(case), kernel, name, SerialComm::new()).expect("set-up");
+        let mut sim = Simulation::new(scene(case), kernel, name).expect("set-up");
         sim.set_write_particles(true);
         sim.set_time_line_end(line_end(case));
-        sim.run(Stop::Steps(steps), out, Progress::Quiet)
+        sim.run_serial(Stop::Steps(steps), out, Progress::Quiet)
     };
     match summary {
         Ok(_) if rank > 0 => {}
