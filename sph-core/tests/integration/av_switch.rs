@@ -3,7 +3,7 @@
 //! exponential decay of alpha, its bounds, and momentum conservation with
 //! per-particle alpha.
 
-use crate::common;
+use crate::common::{self, kernel, Rng};
 
 use proptest::prelude::*;
 use sph_core::av_switch::{
@@ -16,26 +16,10 @@ use sph_core::momentum::{
     momentum_energy, momentum_energy_switched, Gradients, HydroState, PairFactors, Rates,
 };
 use sph_core::{Eos, FieldSet, Particles};
-use sph_kernels::{Sinc, Tabulated};
 use sph_tree::{
     apply_permutation, compute_keys, Boundary, BoundingBox, CompactNeighborList, Curve, KeySorter,
     NeighborSearch, Octree,
 };
-
-struct Rng(u64);
-impl Rng {
-    fn uniform(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
-fn kernel() -> Tabulated {
-    Tabulated::new(&Sinc::new(6.0).unwrap(), Tabulated::DEFAULT_POINTS).unwrap()
-}
 
 /// An n^3 lattice in the periodic box [-0.5, 0.5)^3 (or an open box when
 /// `periodic` is false), each particle moved by up to `jitter` lattice

@@ -1,6 +1,25 @@
-//! Checks shared by the stage tests.
+//! Checks and set-ups shared by the stage tests.
 
 use sph_core::Particles;
+use sph_kernels::{Sinc, Tabulated};
+
+/// SplitMix64: seeded uniform numbers in [0, 1).
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn uniform(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// The stage tests' kernel: sinc with n = 6, tabulated.
+pub fn kernel() -> Tabulated {
+    Tabulated::new(&Sinc::new(6.0).unwrap(), Tabulated::DEFAULT_POINTS).unwrap()
+}
 
 /// How far one force evaluation is from conserving momentum and energy:
 /// the largest `|sum_i m_i a_i|` over the axes relative to
