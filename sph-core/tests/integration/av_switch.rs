@@ -16,10 +16,7 @@ use sph_core::momentum::{
     momentum_energy, momentum_energy_switched, Gradients, HydroState, PairFactors, Rates,
 };
 use sph_core::{Eos, FieldSet, Particles};
-use sph_tree::{
-    apply_permutation, compute_keys, Boundary, BoundingBox, CompactNeighborList, Curve, KeySorter,
-    NeighborSearch, Octree,
-};
+use sph_tree::{Boundary, BoundingBox, CompactNeighborList};
 
 /// An n^3 lattice in the periodic box [-0.5, 0.5)^3 (or an open box when
 /// `periodic` is false), each particle moved by up to `jitter` lattice
@@ -50,12 +47,7 @@ fn lattice(n: usize, jitter: f64, ng: f64, seed: u64) -> Setup {
         p.u[i] = 1.0;
         p.h[i] = 0.5 * (3.0 * ng / (4.0 * std::f64::consts::PI * np as f64)).cbrt();
     }
-    let mut keys = Vec::new();
-    compute_keys(&bbox, Curve::Hilbert, &p.x, &p.y, &p.z, &mut keys);
-    let mut perm = Vec::new();
-    KeySorter::new().sort(&keys, None, &mut perm);
-    p.reorder(&perm, &mut Vec::new());
-    apply_permutation(&perm, &mut keys, &mut Vec::new());
+    let keys = common::sort_along_curve(&mut p, &bbox);
     let mut s = Setup {
         p,
         bbox,
@@ -68,24 +60,8 @@ fn lattice(n: usize, jitter: f64, ng: f64, seed: u64) -> Setup {
 
 /// Neighbour lists for the current h, density, IAD and the EOS.
 fn refresh(s: &mut Setup) {
+    common::symmetric_lists(&s.p, &s.bbox, &s.keys, &mut s.list);
     let p = &mut s.p;
-    let tree = Octree::build(&s.keys, &p.x, &p.y, &p.z, 16).unwrap();
-    let search = NeighborSearch {
-        symmetric: true,
-        ..Default::default()
-    };
-    search
-        .find_compact(
-            &tree,
-            &s.bbox,
-            &p.x,
-            &p.y,
-            &p.z,
-            &p.h,
-            0..p.len(),
-            &mut s.list,
-        )
-        .unwrap();
     let pos = Positions {
         x: &p.x,
         y: &p.y,
@@ -225,11 +201,7 @@ fn linear_setup(jitter: f64, seed: u64) -> (Setup, [[f64; 3]; 3]) {
     // Open box: particles near the faces have one-sided neighbourhoods,
     // which IAD handles exactly too.
     s.bbox = BoundingBox::cube(-0.6, 0.6, Boundary::Open).unwrap();
-    compute_keys(&s.bbox, Curve::Hilbert, &s.p.x, &s.p.y, &s.p.z, &mut s.keys);
-    let mut perm = Vec::new();
-    KeySorter::new().sort(&s.keys, None, &mut perm);
-    s.p.reorder(&perm, &mut Vec::new());
-    apply_permutation(&perm, &mut s.keys, &mut Vec::new());
+    s.keys = common::sort_along_curve(&mut s.p, &s.bbox);
     refresh(&mut s);
     // d_a v_b = g[a][b]
     let g = [[0.7, -1.3, 0.4], [2.1, -0.9, 0.25], [-0.6, 1.1, -1.7]];

@@ -16,10 +16,7 @@ use sph_core::momentum::{
 };
 use sph_core::AvForm;
 use sph_core::{Eos, FieldSet, Particles};
-use sph_tree::{
-    apply_permutation, compute_keys, Boundary, BoundingBox, CompactNeighborList, Curve, KeySorter,
-    NeighborSearch, Octree,
-};
+use sph_tree::{Boundary, BoundingBox, CompactNeighborList, NeighborSearch, Octree};
 
 /// An n^3 lattice in the periodic box [-0.5, 0.5)^3, each particle moved by
 /// up to `jitter` lattice spacings, sorted along the curve, with h for about
@@ -48,12 +45,7 @@ fn lattice(n: usize, jitter: f64, ng: f64, seed: u64) -> Setup {
         p.m[i] = 1.0 / np as f64;
         p.h[i] = 0.5 * (3.0 * ng / (4.0 * std::f64::consts::PI * np as f64)).cbrt();
     }
-    let mut keys = Vec::new();
-    compute_keys(&bbox, Curve::Hilbert, &p.x, &p.y, &p.z, &mut keys);
-    let mut perm = Vec::new();
-    KeySorter::new().sort(&keys, None, &mut perm);
-    p.reorder(&perm, &mut Vec::new());
-    apply_permutation(&perm, &mut keys, &mut Vec::new());
+    let keys = common::sort_along_curve(&mut p, &bbox);
     let mut s = Setup {
         p,
         bbox,
@@ -67,24 +59,7 @@ fn lattice(n: usize, jitter: f64, ng: f64, seed: u64) -> Setup {
 
 /// Symmetric neighbour lists for the current h (as the pipeline builds them).
 fn rebuild_lists(s: &mut Setup, keys: &[u64]) {
-    let p = &s.p;
-    let tree = Octree::build(keys, &p.x, &p.y, &p.z, 16).unwrap();
-    let search = NeighborSearch {
-        symmetric: true,
-        ..Default::default()
-    };
-    search
-        .find_compact(
-            &tree,
-            &s.bbox,
-            &p.x,
-            &p.y,
-            &p.z,
-            &p.h,
-            0..p.len(),
-            &mut s.list,
-        )
-        .unwrap();
+    common::symmetric_lists(&s.p, &s.bbox, keys, &mut s.list);
 }
 
 /// The positions, smoothing lengths and masses of `p`.

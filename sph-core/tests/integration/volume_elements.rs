@@ -15,10 +15,7 @@ use sph_core::momentum::{
 };
 use sph_core::{Eos, FieldSet, Particles, Volume};
 use sph_kernels::Kernel;
-use sph_tree::{
-    apply_permutation, compute_keys, Boundary, BoundingBox, CompactNeighborList, Curve, KeySorter,
-    NeighborSearch, Octree,
-};
+use sph_tree::{Boundary, BoundingBox, CompactNeighborList};
 
 /// An n^3 lattice of unit density in [-0.5, 0.5)^3, each particle moved
 /// by up to `jitter` spacings, in a periodic or an open box, sorted along
@@ -62,12 +59,7 @@ fn lattice_waved(n: usize, jitter: f64, wave: f64, periodic: bool, seed: u64) ->
         p.m[i] = 1.0 / np as f64;
         p.h[i] = 0.5 * (3.0 * 100.0 / (4.0 * std::f64::consts::PI * np as f64)).cbrt();
     }
-    let mut keys = Vec::new();
-    compute_keys(&bbox, Curve::Hilbert, &p.x, &p.y, &p.z, &mut keys);
-    let mut perm = Vec::new();
-    KeySorter::new().sort(&keys, None, &mut perm);
-    p.reorder(&perm, &mut Vec::new());
-    apply_permutation(&perm, &mut keys, &mut Vec::new());
+    let keys = common::sort_along_curve(&mut p, &bbox);
     let mut s = Setup {
         p,
         bbox,
@@ -90,16 +82,9 @@ fn refresh(s: &mut Setup) {
 /// As [`refresh`], with the volume elements of `volume` (`X = m / rho0`
 /// or `X = m u`).
 fn refresh_with(s: &mut Setup, volume: Volume) {
+    common::symmetric_lists(&s.p, &s.bbox, &s.keys, &mut s.list);
     let p = &mut s.p;
     let np = p.len();
-    let tree = Octree::build(&s.keys, &p.x, &p.y, &p.z, 16).unwrap();
-    let search = NeighborSearch {
-        symmetric: true,
-        ..Default::default()
-    };
-    search
-        .find_compact(&tree, &s.bbox, &p.x, &p.y, &p.z, &p.h, 0..np, &mut s.list)
-        .unwrap();
     let k = kernel();
     let pos = Positions {
         x: &p.x,

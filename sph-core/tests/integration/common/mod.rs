@@ -2,6 +2,10 @@
 
 use sph_core::Particles;
 use sph_kernels::{Sinc, Tabulated};
+use sph_tree::{
+    apply_permutation, compute_keys, BoundingBox, CompactNeighborList, Curve, KeySorter,
+    NeighborSearch, Octree,
+};
 
 /// SplitMix64: seeded uniform numbers in [0, 1).
 pub struct Rng(pub u64);
@@ -14,6 +18,36 @@ impl Rng {
         z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
         ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
     }
+}
+
+/// Sorts `p` along the Hilbert curve of `bbox`; returns the keys in the
+/// new order.
+pub fn sort_along_curve(p: &mut Particles, bbox: &BoundingBox) -> Vec<u64> {
+    let mut keys = Vec::new();
+    compute_keys(bbox, Curve::Hilbert, &p.x, &p.y, &p.z, &mut keys);
+    let mut perm = Vec::new();
+    KeySorter::new().sort(&keys, None, &mut perm);
+    p.reorder(&perm, &mut Vec::new());
+    apply_permutation(&perm, &mut keys, &mut Vec::new());
+    keys
+}
+
+/// Symmetric neighbour lists of every particle of `p` (sorted, with
+/// `keys`) for its current h, as the pipeline builds them.
+pub fn symmetric_lists(
+    p: &Particles,
+    bbox: &BoundingBox,
+    keys: &[u64],
+    list: &mut CompactNeighborList,
+) {
+    let tree = Octree::build(keys, &p.x, &p.y, &p.z, 16).unwrap();
+    let search = NeighborSearch {
+        symmetric: true,
+        ..Default::default()
+    };
+    search
+        .find_compact(&tree, bbox, &p.x, &p.y, &p.z, &p.h, 0..p.len(), list)
+        .unwrap();
 }
 
 /// The stage tests' kernel: sinc with n = 6, tabulated.
