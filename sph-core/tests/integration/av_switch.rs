@@ -3,7 +3,7 @@
 //! exponential decay of alpha, its bounds, and momentum conservation with
 //! per-particle alpha.
 
-use crate::common::{self, kernel, Rng};
+use crate::common::{self, kernel, Rng, Setup};
 
 use proptest::prelude::*;
 use sph_core::av_switch::{
@@ -15,45 +15,14 @@ use sph_core::iad::iad;
 use sph_core::momentum::{
     momentum_energy, momentum_energy_switched, Gradients, HydroState, PairFactors, Rates,
 };
-use sph_core::{Eos, FieldSet, Particles};
-use sph_tree::{Boundary, BoundingBox, CompactNeighborList};
+use sph_core::{Eos, Particles};
+use sph_tree::{Boundary, BoundingBox};
 
-/// An n^3 lattice in the periodic box [-0.5, 0.5)^3 (or an open box when
-/// `periodic` is false), each particle moved by up to `jitter` lattice
-/// spacings, sorted along the curve, with h for about `ng` neighbours, unit
-/// total mass, density and IAD computed and symmetric neighbour lists.
-struct Setup {
-    p: Particles,
-    bbox: BoundingBox,
-    list: CompactNeighborList,
-    keys: Vec<u64>,
-}
-
+/// [`common::periodic_lattice`] with u = 1, density, IAD and the EOS
+/// computed.
 fn lattice(n: usize, jitter: f64, ng: f64, seed: u64) -> Setup {
-    let mut rng = Rng(seed);
-    let np = n * n * n;
-    let mut p = Particles::new(np, FieldSet::default());
-    let dx = 1.0 / n as f64;
-    let bbox = BoundingBox::cube(-0.5, 0.5, Boundary::Periodic).unwrap();
-    for i in 0..np {
-        let c = [i % n, i / n % n, i / (n * n)];
-        let mut q = [0.0; 3];
-        for k in 0..3 {
-            q[k] = (c[k] as f64 + 0.5) * dx - 0.5 + jitter * dx * (rng.uniform() - 0.5);
-        }
-        let q = bbox.wrap(q);
-        (p.x[i], p.y[i], p.z[i]) = (q[0], q[1], q[2]);
-        p.m[i] = 1.0 / np as f64;
-        p.u[i] = 1.0;
-        p.h[i] = 0.5 * (3.0 * ng / (4.0 * std::f64::consts::PI * np as f64)).cbrt();
-    }
-    let keys = common::sort_along_curve(&mut p, &bbox);
-    let mut s = Setup {
-        p,
-        bbox,
-        list: CompactNeighborList::new(),
-        keys,
-    };
+    let mut s = common::periodic_lattice(n, jitter, ng, seed);
+    s.p.u.fill(1.0);
     refresh(&mut s);
     s
 }

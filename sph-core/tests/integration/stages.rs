@@ -1,7 +1,7 @@
 //! Property tests of the SPH stages: exactness of IAD, conservation by the
 //! pairwise forces, lattice density, integrator reversibility.
 
-use crate::common::{self, kernel, Rng};
+use crate::common::{self, kernel, periodic_lattice as lattice, Rng, Setup};
 
 use proptest::prelude::*;
 use sph_core::av_switch::{velocity_divergence, FlowState};
@@ -16,46 +16,7 @@ use sph_core::momentum::{
 };
 use sph_core::AvForm;
 use sph_core::{Eos, FieldSet, Particles};
-use sph_tree::{Boundary, BoundingBox, CompactNeighborList, NeighborSearch, Octree};
-
-/// An n^3 lattice in the periodic box [-0.5, 0.5)^3, each particle moved by
-/// up to `jitter` lattice spacings, sorted along the curve, with h for about
-/// `ng` neighbours, unit total mass and the neighbour lists built.
-struct Setup {
-    p: Particles,
-    bbox: BoundingBox,
-    list: CompactNeighborList,
-    keys: Vec<u64>,
-}
-
-fn lattice(n: usize, jitter: f64, ng: f64, seed: u64) -> Setup {
-    let mut rng = Rng(seed);
-    let np = n * n * n;
-    let mut p = Particles::new(np, FieldSet::default());
-    let dx = 1.0 / n as f64;
-    let bbox = BoundingBox::cube(-0.5, 0.5, Boundary::Periodic).unwrap();
-    for i in 0..np {
-        let c = [i % n, i / n % n, i / (n * n)];
-        let mut q = [0.0; 3];
-        for k in 0..3 {
-            q[k] = (c[k] as f64 + 0.5) * dx - 0.5 + jitter * dx * (rng.uniform() - 0.5);
-        }
-        let q = bbox.wrap(q);
-        (p.x[i], p.y[i], p.z[i]) = (q[0], q[1], q[2]);
-        p.m[i] = 1.0 / np as f64;
-        p.h[i] = 0.5 * (3.0 * ng / (4.0 * std::f64::consts::PI * np as f64)).cbrt();
-    }
-    let keys = common::sort_along_curve(&mut p, &bbox);
-    let mut s = Setup {
-        p,
-        bbox,
-        list: CompactNeighborList::new(),
-        keys: Vec::new(),
-    };
-    rebuild_lists(&mut s, &keys);
-    s.keys = keys;
-    s
-}
+use sph_tree::{Boundary, BoundingBox, NeighborSearch, Octree};
 
 /// Symmetric neighbour lists for the current h (as the pipeline builds them).
 fn rebuild_lists(s: &mut Setup, keys: &[u64]) {

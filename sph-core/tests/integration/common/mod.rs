@@ -1,9 +1,9 @@
 //! Checks and set-ups shared by the stage tests.
 
-use sph_core::Particles;
+use sph_core::{FieldSet, Particles};
 use sph_kernels::{Sinc, Tabulated};
 use sph_tree::{
-    apply_permutation, compute_keys, BoundingBox, CompactNeighborList, Curve, KeySorter,
+    apply_permutation, compute_keys, Boundary, BoundingBox, CompactNeighborList, Curve, KeySorter,
     NeighborSearch, Octree,
 };
 
@@ -17,6 +17,46 @@ impl Rng {
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
         z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
         ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// Particles sorted along the curve, their box, keys and neighbour lists.
+pub struct Setup {
+    pub p: Particles,
+    pub bbox: BoundingBox,
+    pub list: CompactNeighborList,
+    pub keys: Vec<u64>,
+}
+
+/// An n^3 lattice in the periodic box [-0.5, 0.5)^3, each particle moved by
+/// up to `jitter` lattice spacings (seeded by `seed`), sorted along the
+/// curve, with h for about `ng` neighbours, unit total mass and symmetric
+/// neighbour lists; every other field zero.
+pub fn periodic_lattice(n: usize, jitter: f64, ng: f64, seed: u64) -> Setup {
+    let mut rng = Rng(seed);
+    let np = n * n * n;
+    let mut p = Particles::new(np, FieldSet::default());
+    let dx = 1.0 / n as f64;
+    let bbox = BoundingBox::cube(-0.5, 0.5, Boundary::Periodic).unwrap();
+    for i in 0..np {
+        let c = [i % n, i / n % n, i / (n * n)];
+        let mut q = [0.0; 3];
+        for k in 0..3 {
+            q[k] = (c[k] as f64 + 0.5) * dx - 0.5 + jitter * dx * (rng.uniform() - 0.5);
+        }
+        let q = bbox.wrap(q);
+        (p.x[i], p.y[i], p.z[i]) = (q[0], q[1], q[2]);
+        p.m[i] = 1.0 / np as f64;
+        p.h[i] = 0.5 * (3.0 * ng / (4.0 * std::f64::consts::PI * np as f64)).cbrt();
+    }
+    let keys = sort_along_curve(&mut p, &bbox);
+    let mut list = CompactNeighborList::new();
+    symmetric_lists(&p, &bbox, &keys, &mut list);
+    Setup {
+        p,
+        bbox,
+        list,
+        keys,
     }
 }
 
