@@ -773,7 +773,7 @@ impl<C: Communicator> Simulation<C> {
     fn observe_end(&mut self) -> Result<EndState, AppError> {
         let t = self.hydro.time();
         self.hydro
-            .evaluate_density(&mut self.scene.particles, &mut self.scene.bbox)?;
+            .evaluate_closed(&mut self.scene.particles, &mut self.scene.bbox)?;
         let p = &self.scene.particles;
         let owned = self.hydro.owned();
         let comm = self.hydro.domain().comm();

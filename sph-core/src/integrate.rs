@@ -69,6 +69,54 @@ pub fn velocity_now(displacement: f64, a: f64, dt_prev: f64) -> f64 {
     displacement / dt_prev + a * (0.5 * dt_prev)
 }
 
+/// Closes the steps that end now: each particle of `range` for which
+/// `last_step(i)` gives the length of the step it just finished gets its
+/// velocity at this time, `v_n = dX / dt + a_n dt / 2` ([`velocity_now`],
+/// with its new acceleration `a_n`); the others keep theirs.
+///
+/// Between kicks a particle carries the prediction `v + a t` of the
+/// acceleration at its step's start, first order in its step: conserved
+/// sums over predicted velocities mix that error with the integrator's
+/// (Sedov 20^3, block steps at Courant 0.4: 2.2e-3 of the energy against
+/// 2e-4 over closed velocities). The next kick recomputes the same `v_n`
+/// from `dX`, so closing a step changes no trajectory.
+///
+/// ```
+/// use sph_core::integrate::close_steps;
+/// use sph_core::{FieldSet, Particles};
+/// let mut p = Particles::new(2, FieldSet::default());
+/// p.dx[0] = 0.2; // moved 0.2 in a step of 0.1 ...
+/// p.ax[0] = 4.0; // ... and now accelerates
+/// p.vx[1] = 7.0;
+/// close_steps(&mut p, 0..2, |i| (i == 0).then_some(0.1));
+/// assert!((p.vx[0] - (2.0 + 0.2)).abs() < 1e-15);
+/// assert_eq!(p.vx[1], 7.0); // inside its step: the prediction stays
+/// ```
+pub fn close_steps(
+    p: &mut Particles,
+    range: Range<usize>,
+    last_step: impl Fn(usize) -> Option<f64> + Sync,
+) {
+    let (ax, ay, az) = (&p.ax, &p.ay, &p.az);
+    let (dx, dy, dz) = (&p.dx, &p.dy, &p.dz);
+    let o = range.start;
+    (
+        p.vx[range.clone()].par_iter_mut(),
+        p.vy[range.clone()].par_iter_mut(),
+        p.vz[range].par_iter_mut(),
+    )
+        .into_par_iter()
+        .enumerate()
+        .for_each(|(k, (vx, vy, vz))| {
+            let i = o + k;
+            if let Some(dt) = last_step(i) {
+                *vx = velocity_now(dx[i], ax[i], dt);
+                *vy = velocity_now(dy[i], ay[i], dt);
+                *vz = velocity_now(dz[i], az[i], dt);
+            }
+        });
+}
+
 /// Stores the new position `newp`, wrapped into `bbox`, in `pos`; an
 /// error names the particle when a coordinate or its velocity `vel` is not
 /// finite.

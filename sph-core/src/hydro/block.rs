@@ -370,6 +370,14 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             clock.lap(Stage::Gravity);
         }
 
+        // The sums below over the velocities at this time of the particles
+        // whose step ends here (the kick recomputes the same ones); the
+        // first sub-step's are the initial conditions'.
+        let b = &self.block;
+        let o = owned.start;
+        crate::integrate::close_steps(p, owned.clone(), |i| {
+            (!first && b.active[i - o]).then(|| b.elapsed[i])
+        });
         let sync = self.domain.stats();
         let (conserved, [nc_total, over_cap, halos_total, bytes_sent, updates], _) =
             Conserved::compute_with(
@@ -495,6 +503,40 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             all_active,
             ends_synchronised,
         })
+    }
+
+    /// The active set of a closing evaluation
+    /// ([`Hydro::evaluate_closed`]): the owned particles whose step ends at
+    /// the current tick (all of them at a synchronisation point, as at a
+    /// run's end), each with the step it finished, and the impulses'
+    /// inputs as a sub-step there has them. Collective.
+    pub(super) fn prepare_closing(
+        &mut self,
+        p: &Particles,
+        owned: Range<usize>,
+    ) -> Result<(), CoreError> {
+        let line = self.block.line.ok_or_else(|| {
+            CoreError::Invalid("closing block steps needs the run's time line".into())
+        })?;
+        let ti = self.block.ti;
+        let b = &mut self.block;
+        b.active.clear();
+        b.active
+            .extend(owned.clone().map(|i| is_active(ti, bin_of(p.bin[i]))));
+        b.elapsed.clear();
+        b.elapsed.resize(p.len(), 0.0);
+        for i in owned.clone() {
+            b.elapsed[i] = line.dt(bin_of(p.bin[i]));
+        }
+        self.prepare_impulses(p, &line, owned, ti)
+    }
+
+    /// Closes the steps of the active set of
+    /// [`prepare_closing`](Self::prepare_closing).
+    pub(super) fn close_block_steps(&self, p: &mut Particles, owned: Range<usize>) {
+        let b = &self.block;
+        let o = owned.start;
+        crate::integrate::close_steps(p, owned, |i| b.active[i - o].then(|| b.elapsed[i]));
     }
 
     /// Swaps the held fields of the table (`div_v`, `xm`, `kx`,

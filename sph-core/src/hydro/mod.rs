@@ -7,7 +7,7 @@
 
 use crate::conserved::Conserved;
 use crate::density::Positions;
-use crate::integrate::integrate;
+use crate::integrate::{close_steps, integrate};
 use crate::momentum::{Gradients, HydroState, MomentumStats};
 use crate::stirring::Stirring;
 use crate::timestep::DtLimit;
@@ -330,6 +330,11 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
             None => 0.0,
         };
         clock.lap(Stage::Gravity);
+        // The sums below over the velocities at this time (the kick
+        // recomputes the same ones from the history); the first step's
+        // are the initial conditions'.
+        let dt_prev = self.dt_prev;
+        close_steps(p, owned.clone(), |_| (step > 1).then_some(dt_prev));
 
         // One global sum: conserved quantities, neighbour and domain totals,
         // and the stirring's work terms.
@@ -510,6 +515,65 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         p: &mut Particles,
         bbox: &mut BoundingBox,
     ) -> Result<(), CoreError> {
+        let owned = self.evaluate_neighbourhoods(p, bbox)?;
+        self.eos(p, owned.clone())?;
+        self.exchange_thermo(p)?;
+        if self.gravity.is_some() {
+            self.gravity_field(p, bbox, owned, Targets::ALL, self.step)?;
+        }
+        Ok(())
+    }
+
+    /// [`evaluate_density`](Self::evaluate_density), then the forces, and
+    /// the steps that end now closed: each particle whose step ends at the
+    /// current time gets its velocity at this time, the closing half-kick
+    /// `dX / dt + a dt / 2` of the step it finished
+    /// ([`close_steps`](crate::integrate::close_steps)), instead of the
+    /// prediction `v + a t` it carries between kicks. The state a run
+    /// ends with, for its observables and conserved sums; a further step
+    /// would not continue the run to the bit. Before the first step, and
+    /// in stirred runs (the driving advances only with a step), the
+    /// velocities stay as they are.
+    ///
+    /// # Errors
+    /// As [`step`](Self::step).
+    pub fn evaluate_closed(
+        &mut self,
+        p: &mut Particles,
+        bbox: &mut BoundingBox,
+    ) -> Result<(), CoreError> {
+        let block = self.config.time_steps.on_time_line();
+        if self.step == 0 || self.config.stirring.is_some() || (block && !self.block.started) {
+            return self.evaluate_density(p, bbox);
+        }
+        let owned = self.evaluate_neighbourhoods(p, bbox)?;
+        let step = self.step + 1;
+        let mut clock = StageClock::start();
+        if block {
+            self.prepare_closing(p, owned.clone())?;
+        }
+        self.thermo_and_forces(p, bbox, owned.clone(), step, &mut clock)?;
+        if block {
+            self.gather_impulses(owned.clone())?;
+        }
+        self.add_gravity(p, bbox, owned.clone(), Targets::ALL, step)?;
+        if block {
+            self.close_block_steps(p, owned);
+        } else {
+            let dt_prev = self.dt_prev;
+            close_steps(p, owned, |_| Some(dt_prev));
+        }
+        Ok(())
+    }
+
+    /// The sync, neighbour search and density of
+    /// [`evaluate_density`](Self::evaluate_density); returns the owned
+    /// range.
+    fn evaluate_neighbourhoods(
+        &mut self,
+        p: &mut Particles,
+        bbox: &mut BoundingBox,
+    ) -> Result<Range<usize>, CoreError> {
         p.check(self.config.fields())?;
         self.release_step_buffers();
         let owned = self.domain.sync_with(p, bbox, self.next_h_max.take())?;
@@ -518,12 +582,7 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         self.search(p, bbox, self.step, owned.clone(), None)?;
         self.release_tree_after_search();
         self.density(p, bbox)?;
-        self.eos(p, owned.clone())?;
-        self.exchange_thermo(p)?;
-        if self.gravity.is_some() {
-            self.gravity_field(p, bbox, owned, Targets::ALL, self.step)?;
-        }
-        Ok(())
+        Ok(owned)
     }
 }
 
