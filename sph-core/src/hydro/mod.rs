@@ -527,11 +527,10 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
     /// [`evaluate_density`](Self::evaluate_density), then the forces, and
     /// the steps that end now closed: each particle whose step ends at the
     /// current time gets its velocity at this time, the closing half-kick
-    /// `dX / dt + a dt / 2` of the step it finished
-    /// ([`close_steps`](crate::integrate::close_steps)), instead of the
-    /// prediction `v + a t` it carries between kicks. The state a run
-    /// ends with, for its observables and conserved sums; a further step
-    /// would not continue the run to the bit. Before the first step, and
+    /// `dX / dt + a dt / 2` of the step it finished ([`close_steps`]),
+    /// instead of the prediction `v + a t` it carries between kicks. The
+    /// state a run ends with, for its observables and conserved sums; a
+    /// further step would not continue the run to the bit. Before the first step, and
     /// in stirred runs (the driving advances only with a step), the
     /// velocities stay as they are.
     ///
