@@ -127,6 +127,28 @@ impl BlockState {
     pub(super) fn elapsed(&self) -> &[f64] {
         &self.elapsed
     }
+
+    /// Marks the owned particles whose step ends at the current tick
+    /// (every one with `all`: the first sub-step).
+    fn mark_active(&mut self, bins: &[f64], owned: Range<usize>, all: bool) {
+        let ti = self.ti;
+        self.active.clear();
+        self.active
+            .extend(owned.map(|i| all || is_active(ti, bin_of(bins[i]))));
+    }
+
+    /// Sets each owned particle's step as its time since its last update
+    /// (read where it is active; none before the first sub-step) and 0
+    /// for the other `len - owned` local particles.
+    fn mark_elapsed(&mut self, line: &TimeLine, bins: &[f64], len: usize, owned: Range<usize>) {
+        self.elapsed.clear();
+        self.elapsed.resize(len, 0.0);
+        if self.started {
+            for i in owned {
+                self.elapsed[i] = line.dt(bin_of(bins[i]));
+            }
+        }
+    }
 }
 
 /// A particle's bin, stored as an exact `f64` in `Particles::bin`.
@@ -295,13 +317,8 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
 
         let ti = self.block.ti;
         let all_active = first || self.block.at_sync_point;
-        let mut active = std::mem::take(&mut self.block.active);
-        active.clear();
-        active.extend(
-            owned
-                .clone()
-                .map(|i| first || is_active(ti, bin_of(p.bin[i]))),
-        );
+        self.block.mark_active(&p.bin, owned.clone(), first);
+        let active = std::mem::take(&mut self.block.active);
         if std::mem::take(&mut self.block.restored) {
             let behind = owned.clone().zip(&active).find(|(_, &a)| !a);
             let behind = self.domain.comm().all_reduce_scalar(
@@ -323,14 +340,8 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         // The held buffers of the scheme's stages (div v, X, k) come from
         // the table for this sub-step and go back after it.
         self.swap_held_buffers(p);
-        let elapsed = &mut self.block.elapsed;
-        elapsed.clear();
-        elapsed.resize(p.len(), 0.0);
-        if !first {
-            for i in owned.clone() {
-                elapsed[i] = line.dt(bin_of(p.bin[i]));
-            }
-        }
+        self.block
+            .mark_elapsed(&line, &p.bin, p.len(), owned.clone());
         let before = &mut self.block.rho_before;
         before.clear();
         before.extend_from_slice(&p.rho[owned.clone()]);
@@ -518,17 +529,10 @@ impl<K: Kernel, C: Communicator> Hydro<K, C> {
         let line = self.block.line.ok_or_else(|| {
             CoreError::Invalid("closing block steps needs the run's time line".into())
         })?;
-        let ti = self.block.ti;
-        let b = &mut self.block;
-        b.active.clear();
-        b.active
-            .extend(owned.clone().map(|i| is_active(ti, bin_of(p.bin[i]))));
-        b.elapsed.clear();
-        b.elapsed.resize(p.len(), 0.0);
-        for i in owned.clone() {
-            b.elapsed[i] = line.dt(bin_of(p.bin[i]));
-        }
-        self.prepare_impulses(p, &line, owned, ti)
+        self.block.mark_active(&p.bin, owned.clone(), false);
+        self.block
+            .mark_elapsed(&line, &p.bin, p.len(), owned.clone());
+        self.prepare_impulses(p, &line, owned, self.block.ti)
     }
 
     /// Closes the steps of the active set of
