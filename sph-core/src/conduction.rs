@@ -16,6 +16,8 @@
 
 use crate::density::Positions;
 use crate::pair_loop::{F64s, Group, PairLoop, PairStage};
+use crate::Choice;
+use serde::{Deserialize, Serialize};
 use sph_kernels::Kernel;
 use sph_tree::{BoundingBox, CompactNeighborList};
 use std::sync::atomic::{AtomicI64, Ordering};
@@ -84,11 +86,83 @@ pub fn conduction<K: Kernel>(
             alpha_u,
             p,
             u,
-            contrast: false,
+            contrast: Contrast::Off,
             impulses: None,
         },
     };
     driver.run(&stage, [&mut du[nl.targets()]]);
+}
+
+/// What weights each pair's conduction term (`--conduction-contrast`).
+///
+/// The weight is a contrast in `[0, 1]`: the flux then goes as the square
+/// of a small jump, so heat crosses fronts at full strength while
+/// neighbours that differ little exchange less. Antisymmetric whatever
+/// the weight: energy is conserved.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+#[non_exhaustive]
+pub enum Contrast {
+    /// Price's term as it is.
+    #[default]
+    Off,
+    /// Weighted by the pair's contrast of internal energy,
+    /// `|u_i - u_j| / max(u_i, u_j)`: Sod's contact (u differing by 2x)
+    /// exchanges less than with Price's term, but so does a cold
+    /// collapse's shocked core, whose u differs little between neighbours
+    /// (`docs/schemes.md`, 2026-12-06 and 2026-12-07).
+    Energy,
+    /// Weighted by the pair's contrast of pressure,
+    /// `min(|P_i - P_j| / max(|P_i|, |P_j|), 1)`: contacts in pressure
+    /// equilibrium exchange nearly nothing (the signal velocity
+    /// `sqrt(|P_i - P_j| / rho_ij)` already vanishes there), while the
+    /// pressure noise of a shocked core and every shock conduct. So does
+    /// not the hot, nearly isobaric interior of a blast: Sedov's L1 P at
+    /// 50^3 rises by 5% against [`Energy`](Self::Energy).
+    Pressure,
+    /// The larger of the two contrasts: heat crosses a jump of pressure
+    /// (a shocked core's noise, where neighbours' `u` differ little) and a
+    /// large jump of `u` (a blast's hot interior), while a contact's
+    /// modest jump of `u` at one pressure exchanges as with
+    /// [`Energy`](Self::Energy) (`docs/schemes.md`, 2026-12-07, evening).
+    Larger,
+}
+
+/// `--conduction-contrast` and the `conduction-contrast` key.
+impl Choice for Contrast {
+    const ALL: &'static [Self] = &[
+        Contrast::Off,
+        Contrast::Energy,
+        Contrast::Pressure,
+        Contrast::Larger,
+    ];
+
+    fn name(&self) -> &'static str {
+        match self {
+            Contrast::Off => "off",
+            Contrast::Energy => "energy",
+            Contrast::Pressure => "pressure",
+            Contrast::Larger => "larger",
+        }
+    }
+
+    fn help(&self) -> &'static str {
+        match self {
+            Contrast::Off => "Price's conduction as it is",
+            Contrast::Energy => {
+                "Each pair's term times |u_i - u_j| / max(u_i, u_j), its contrast of internal \
+                 energy"
+            }
+            Contrast::Pressure => {
+                "Each pair's term times min(|P_i - P_j| / max(|P_i|, |P_j|), 1), its contrast \
+                 of pressure"
+            }
+            Contrast::Larger => {
+                "Each pair's term times the larger of its contrasts of internal energy and of \
+                 pressure (`gas`'s)"
+            }
+        }
+    }
 }
 
 /// The conductivity of a momentum pass: `alpha_u` and the pressure and
@@ -101,13 +175,8 @@ pub struct Conductivity<'a> {
     pub p: &'a [f64],
     /// Internal energy per mass.
     pub u: &'a [f64],
-    /// Each pair's term weighted by its contrast of internal energy,
-    /// `|u_i - u_j| / max(u_i, u_j)`: the flux then goes as the square of
-    /// a small jump, so heat crosses fronts (Sedov's hot gas against the
-    /// cold) at full strength while neighbours of similar `u` (Sod's
-    /// contact, u differing by 2x) exchange less (`docs/schemes.md`,
-    /// 2026-12-06, one scheme). Still antisymmetric: energy is conserved.
-    pub contrast: bool,
+    /// What weights each pair's term ([`Contrast`]).
+    pub contrast: Contrast,
     /// Under block time steps, the pair terms as impulses
     /// ([`ImpulseWeights`]); `None`: a rate added to `du/dt`.
     pub impulses: Option<ImpulseWeights<'a>>,
@@ -149,7 +218,7 @@ pub(crate) struct ConductionTarget {
     pub(crate) rho: F64s,
     pub(crate) p: F64s,
     pub(crate) u: F64s,
-    pub(crate) contrast: bool,
+    pub(crate) contrast: Contrast,
     /// With impulses: the targets' time since their last kick, their
     /// masses and the lanes whose sums are kept.
     since: F64s,
@@ -233,25 +302,28 @@ impl ConductionTarget {
 
     /// Partner `j`'s term of the sum (before the factor `alpha_u`),
     /// `m_j v_u (u_i - u_j) / rho_ij dW`, for the mean kernel derivative
-    /// `dW` ([`mean_derivative`](Self::mean_derivative)), times
-    /// `|u_i - u_j| / max(u_i, u_j)` with [`Conductivity::contrast`]. A
-    /// zero mass or `dW` (partners beyond both supports) gives an exact
-    /// zero.
+    /// `dW` ([`mean_derivative`](Self::mean_derivative)), times the
+    /// pair's [`Contrast`]. A zero mass or `dW` (partners beyond both
+    /// supports) gives an exact zero.
     #[inline(always)]
     pub(crate) fn term(&self, m_j: F64s, dw: F64s, rho_j: f64, p_j: f64, u_j: f64) -> F64s {
         let rho_ij = 0.5 * (self.rho + rho_j);
-        let v_u = ((self.p - p_j).abs() / rho_ij).sqrt();
+        let dp = self.p - p_j;
+        let v_u = (dp.abs() / rho_ij).sqrt();
         let du = self.u - u_j;
         let flux = m_j * v_u * du / rho_ij * dw;
-        if self.contrast {
-            // max(u_i, u_j) = 0 only where both are 0, and then du = 0.
-            let top = self
-                .u
-                .max(F64s::splat(u_j))
-                .max(F64s::splat(f64::MIN_POSITIVE));
-            flux * du.abs() / top
-        } else {
-            flux
+        // A top of 0 only where both values are 0, and then the jump is 0.
+        let tiny = F64s::splat(f64::MIN_POSITIVE);
+        let of_u = || du.abs() / self.u.max(F64s::splat(u_j)).max(tiny);
+        let of_p = || {
+            let top = self.p.abs().max(F64s::splat(p_j.abs())).max(tiny);
+            (dp.abs() / top).min(F64s::splat(1.0))
+        };
+        match self.contrast {
+            Contrast::Off => flux,
+            Contrast::Energy => flux * of_u(),
+            Contrast::Pressure => flux * of_p(),
+            Contrast::Larger => flux * of_u().max(of_p()),
         }
     }
 }

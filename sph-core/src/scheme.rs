@@ -25,6 +25,7 @@
 //! ```
 
 use crate::av_switch::AvSwitchParams;
+pub use crate::conduction::Contrast;
 pub use crate::momentum::{AvForm, Volume};
 use crate::pair_loop::Gradients;
 use crate::{CoreError, FieldSet};
@@ -104,12 +105,27 @@ pub struct Scheme {
     /// switches it has no effect.
     #[serde(default)]
     pub weak_shock_alpha: Option<f64>,
-    /// The conduction's pair terms weighted by their contrast of internal
-    /// energy, `|u_i - u_j| / max(u_i, u_j)`
-    /// ([`Conductivity::contrast`](crate::conduction::Conductivity::contrast)).
-    /// Without conductivity it has no effect.
-    #[serde(default)]
-    pub conduction_contrast: bool,
+    /// What weights the conduction's pair terms ([`Contrast`]: off, or
+    /// the pair's contrast of internal energy or of pressure). Without
+    /// conductivity it has no effect.
+    #[serde(default, deserialize_with = "contrast_or_flag")]
+    pub conduction_contrast: Contrast,
+}
+
+/// [`Scheme::conduction_contrast`] as written before it had a choice of
+/// contrasts: `true` was the contrast of internal energy.
+fn contrast_or_flag<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Contrast, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum Written {
+        Flag(bool),
+        Named(Contrast),
+    }
+    Ok(match Written::deserialize(d)? {
+        Written::Flag(true) => Contrast::Energy,
+        Written::Flag(false) => Contrast::Off,
+        Written::Named(c) => c,
+    })
 }
 
 impl Default for Scheme {
@@ -123,7 +139,7 @@ pub const PRESETS: [(&str, Scheme, &str); 10] = [
     (
         "gas",
         Scheme::GAS,
-        "issue 42's one scheme for the ideal-gas cases (`sphexa cases` lists those it is the default of; scenes of your own run it too): `best` with AV cleaning, switches that rise to alpha 2 at weak shocks (0.4 at strong ones) and conductivity 2 weighted by each pair's contrast of u",
+        "issue 42's one scheme for the ideal-gas cases (`sphexa cases` lists those it is the default of; scenes of your own run it too): `best` with AV cleaning, switches that rise to alpha 2 at weak shocks (0.3 at strong ones) and conductivity 2 weighted by the larger of each pair's contrasts of u and of pressure",
     ),
     (
         "paper",
@@ -187,7 +203,7 @@ impl Scheme {
         fixed_h: false,
         av_cleaning: false,
         weak_shock_alpha: None,
-        conduction_contrast: false,
+        conduction_contrast: Contrast::Off,
     };
 
     /// What SPH-EXA's `std` propagator runs: the paper's scheme without
@@ -224,7 +240,7 @@ impl Scheme {
         fixed_h: false,
         av_cleaning: false,
         weak_shock_alpha: None,
-        conduction_contrast: false,
+        conduction_contrast: Contrast::Off,
     };
 
     /// [`Scheme::VE`] without the grad-h terms and with the artificial
@@ -258,26 +274,33 @@ impl Scheme {
 
     /// One scheme for every ideal-gas case, issue 42's (the default of most
     /// of them and of scenes of your own: each case's `default_scheme`, as
-    /// `sphexa cases` lists it; the isobaric cube and Evrard keep their own
-    /// until it meets their bounds): [`Scheme::BEST`] with AV cleaning (shear
+    /// `sphexa cases` lists it; the isobaric cube keeps its own
+    /// until it meets its bound): [`Scheme::BEST`] with AV cleaning (shear
     /// and smooth flows keep their kinetic energy: Gresho, Kelvin-Helmholtz),
-    /// switches whose ceiling rises from 0.4 at strong shocks (Noh's and
-    /// Sedov's, into cold gas; 0.5 thins Noh's plateau by 3.5%) to 2 at
-    /// weak ones (Sod's: they ring behind the front with less)
+    /// switches whose ceiling rises from 0.3 at strong shocks (Noh's and
+    /// Sedov's, into cold gas: with the conduction below, Noh's plateau
+    /// under block steps at 44^3 is 0.949 of the analytic at 0.4, 0.970
+    /// at 0.35 and 1.006 at 0.3 (with the pressure contrast alone; 1.016
+    /// at 37^3); Sedov's L1 moves in the third digit) to 2 at weak ones (Sod's: they ring behind the front with less)
     /// ([`AvSwitchParams::ceiling`]), and conductivity
-    /// `alpha_u = 2` weighted by each pair's contrast of `u`
-    /// ([`Scheme::conduction_contrast`]: Sedov's front needs the heat flux
-    /// across its contrast of 10^5, Sod's contact, u differing by 2x,
-    /// smears with Price's full flux). Measured on every case at two
-    /// resolutions in `docs/schemes.md` (2026-12-06, one scheme).
+    /// `alpha_u = 2` weighted by the larger of each pair's contrasts of
+    /// `u` and of pressure ([`Contrast::Larger`]: Sedov's front and hot
+    /// interior need the heat flux across their contrasts of `u`, Sod's
+    /// contact, u differing by 2x at one pressure, smears with Price's
+    /// full flux, and a collapse's shocked core needs it across its
+    /// pressure noise, where neighbours' `u` differ little: with the
+    /// contrast of `u` alone Evrard's E_kin at t = 2.0 is 13.1% low at
+    /// 14k particles and its E_int 6.9% low at 65k). Measured on every case at two resolutions in
+    /// `docs/schemes.md` (2026-12-06, one scheme; 2026-12-07 (evening), the
+    /// larger contrast).
     pub const GAS: Scheme = Scheme {
         viscosity: Viscosity::Switched(AvSwitchParams {
-            alpha_max: 0.4,
+            alpha_max: 0.3,
             ..AvSwitchParams::SPHEXA
         }),
         av_cleaning: true,
         conductivity: Some(2.0),
-        conduction_contrast: true,
+        conduction_contrast: Contrast::Larger,
         weak_shock_alpha: Some(2.0),
         ..Scheme::BEST
     };
@@ -327,7 +350,7 @@ impl Scheme {
         fixed_h: false,
         av_cleaning: false,
         weak_shock_alpha: None,
-        conduction_contrast: false,
+        conduction_contrast: Contrast::Off,
     };
 
     /// The `evrard` case's scheme: kernel gradients, no grad-h, viscosity
@@ -351,7 +374,7 @@ impl Scheme {
         fixed_h: false,
         av_cleaning: false,
         weak_shock_alpha: None,
-        conduction_contrast: false,
+        conduction_contrast: Contrast::Off,
     };
 
     /// The preset called `name` (see [`PRESETS`]).

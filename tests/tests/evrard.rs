@@ -1,25 +1,32 @@
-//! Evrard collapse (the unit sphere cut from a glass at 30 particles per
-//! 2 units: 14175 particles, self-gravity) to t = 2.0, with the case's
-//! scheme and Courant factor, against the energies of the 1-D Lagrangian
-//! reference in `docs/cases.md` (quoted there as good to 2%;
+//! Evrard collapse (the unit sphere cut from a glass, self-gravity) to
+//! t = 2.0 with the case's scheme (`gas`, issue 42's one scheme for the
+//! ideal-gas cases), Courant factor and time steps (block, the command
+//! line's default), against the energies of the 1-D Lagrangian reference
+//! in `docs/cases.md` (quoted there as good to 2%;
 //! `tests/reference/evrard_1d.py`, an independent 1-D code, lands within
-//! 0.8% of them): E_kin, E_int and E_grav within 7.5% at t = 0.8 (infall),
-//! t = 1.0 (the bounce) and t = 2.0 (after it); total energy (including
-//! E_grav) conserved to 1e-2 through the bounce (t <= 1.5).
+//! 0.8% of them). Issue 42's bounds (issue 16's, re-scoped): E_kin, E_int
+//! and E_grav within 5% at t = 0.8 (infall) and t = 1.0 (the bounce); at
+//! t = 2.0 E_int and E_grav within 5% and E_kin within 12% (it lives in
+//! the ejected outer ~5% of the mass, which the 1-D code itself resolves
+//! within 5% only with ~400 shells) and its error falling with
+//! resolution (measured below, not asserted: the second resolution is
+//! too long for CI); total energy (including E_grav) conserved to 1e-2 through the bounce
+//! (t <= 1.5).
 //!
-//! Measured: t = 0.8 -3.0% / +0.6% / -0.7%, t = 1.0 -0.0% / -2.1% /
-//! -1.4%, t = 2.0 -4.3% / +5.1% / +1.7%, drift 7.1e-4 (962 steps, ~2
-//! minutes on 2 cores); at 40^3 every entry is within 4.7% (and at 20^3
-//! within 6.5%, measured with the earlier Courant factor 0.4), so 7.5% is the reference's 2% above the spread over resolutions. E_kin at
-//! t = 1.0 falls by 2 per unit time there: 7.5% of it is a shift of the
-//! bounce by 0.01 in time.
+//! Measured (2026-12-07, evening, release, 2 threads), 14,175 particles
+//! (`-n 30`): t = 0.8 -0.3 / -1.3 / -1.0%, t = 1.0 +3.6 / -3.8 / -2.1%,
+//! t = 2.0 -9.6 / +3.6 / +0.2%, drift through the bounce 2.6e-3 (9.9 M
+//! updates). At 65,484 particles (`-n 50`, not run here: about 20 minutes
+//! on 2 cores) `docs/schemes.md` has the figures (2026-12-07, evening):
+//! E_int at t = 2.0 is outside its 5% there.
 
 use sph_apps::simulation::Stop;
 use sph_apps::Summary;
+use std::path::Path;
 
-/// E_kin, E_int and E_grav of run `s` (`label`) within `bound` (relative)
-/// of the reference at each of `times`.
-fn energies_match(s: &Summary, times: &[f64], bound: f64, label: &str) {
+/// E_kin, E_int and E_grav of run `s` (`label`) within `bound(t, name)`
+/// (relative) of the reference at each of `times`.
+fn energies_match(s: &Summary, times: &[f64], bound: impl Fn(f64, &str) -> f64, label: &str) {
     for &t in times {
         let e = s
             .energies
@@ -37,22 +44,25 @@ fn energies_match(s: &Summary, times: &[f64], bound: f64, label: &str) {
                 100.0 * rel
             );
             assert!(
-                rel.abs() < bound,
+                rel.abs() < bound(t, name),
                 "{label}, t = {t}: {name} = {got}, reference {want}"
             );
         }
     }
 }
 
-#[test]
-fn evrard_30_energies_match_reference() {
-    let scene = sph_validation::scene("evrard", 30);
-    let out = sph_validation::scratch("evrard30");
-    let s = sph_validation::run(scene, Stop::Time(2.0), &out);
+/// Issue 42's bounds: 5% everywhere but E_kin at t = 2.0, 12%.
+fn issue_bound(t: f64, name: &str) -> f64 {
+    if t == 2.0 && name == "E_kin" {
+        0.12
+    } else {
+        0.05
+    }
+}
 
-    energies_match(&s, &[0.8, 1.0, 2.0], 0.075, "30");
-
-    // Total energy through the bounce, from conserved.csv.
+/// The largest |E_tot - E_tot(0)| / |E_tot(0)| through t = 1.5, from
+/// `conserved.csv` in `out`.
+fn drift_through_bounce(out: &Path) -> f64 {
     let text = std::fs::read_to_string(out.join("conserved.csv")).unwrap();
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
@@ -62,11 +72,23 @@ fn evrard_30_energies_match_reference() {
         .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
         .collect();
     let e0 = rows[0][ce];
-    let drift = rows
-        .iter()
+    rows.iter()
         .filter(|r| r[ct] <= 1.5)
         .map(|r| ((r[ce] - e0) / e0).abs())
-        .fold(0.0, f64::max);
+        .fold(0.0, f64::max)
+}
+
+/// The case as a user runs it (`-n 30`, block time steps) to t = 2.0:
+/// the energies within [`issue_bound`] and the drift through the bounce
+/// within 1e-2.
+#[test]
+fn evrard_30_energies_match_reference() {
+    let mut scene = sph_validation::scene("evrard", 30);
+    scene.config.time_steps = sph_core::TimeSteps::Block;
+    let out = sph_validation::scratch("evrard30");
+    let s = sph_validation::run(scene, Stop::Time(2.0), &out);
+    energies_match(&s, &[0.8, 1.0, 2.0], issue_bound, "30");
+    let drift = drift_through_bounce(&out);
     println!("largest |E_tot drift| through t = 1.5: {drift:.2e}");
     assert!(drift < 1e-2, "energy drift {drift:e}");
 }
@@ -79,12 +101,14 @@ fn evrard_30_energies_match_reference() {
 /// total energy of the end state (every particle fresh) within 1e-2 of
 /// the start (the global test's bound through the bounce), and fewer than
 /// 60% of the particles updated per sub-step on average. Measured
-/// (2026-12-06, night, the conduction exchanged as impulses): at 32
-/// t = 0.8 -2.0% / +0.7% / -1.3%, t = 1.0 +2.4% / -1.4% / -0.6% (global
-/// -2.6 / +0.6 / -0.6 and +0.7 / -1.8 / -1.2), drift -3.8e-3 (global
-/// 3.1e-4), 2.83 M updates; at 24 -3.6 / +0.7 / -1.9% and -0.1 / -3.1 /
-/// -1.9%, drift -6.7e-3, 1.13 M updates in 532 sub-steps (0.29 per
-/// sub-step). The drift bound was 5e-3 while the conduction was a rate
+/// (2026-12-07, evening, `gas` at Courant 0.3): at 32 t = 0.8 -0.3 /
+/// -1.5 / -1.4%, t = 1.0 +4.4 / -3.9 / -2.0%, drift -2.7e-3, 4.47 M
+/// updates in 818 sub-steps (0.32 per sub-step); at 24 -0.5 / -1.1 /
+/// -1.2% and +1.1 / -3.9 / -2.4%, drift -1.1e-3, 1.65 M updates in 718
+/// sub-steps (0.32). With the `evrard` preset at Courant 0.5 (2026-12-06,
+/// night): at 32 -2.0 / +0.7 / -1.3%, +2.4 / -1.4 / -0.6%, drift
+/// -3.8e-3; at 24 -3.6 / +0.7 / -1.9%, -0.1 / -3.1 / -1.9%, drift
+/// -6.7e-3. The drift bound was 5e-3 while the conduction was a rate
 /// (drift -3.4e-3 at 32, -3.1e-3 at 24): the impulses conserve their own
 /// exchange to round-off but move `u` of particles inside their step,
 /// whose held pressure work then lags (an inactive particle's held
@@ -97,7 +121,7 @@ fn evrard_block_steps_energies_match_reference() {
         scene.config.time_steps = sph_core::TimeSteps::Block;
         let out = sph_validation::scratch(&format!("evrard{side}-block"));
         let s = sph_validation::run(scene, Stop::Time(1.0), &out);
-        energies_match(&s, &[0.8, 1.0], 0.05, &side.to_string());
+        energies_match(&s, &[0.8, 1.0], |_, _| 0.05, &side.to_string());
         println!(
             "{side}: drift {:.2e}, {} updates in {} sub-steps of {} particles",
             s.energy_rel_drift, s.particle_updates, s.steps, s.particles

@@ -9,8 +9,8 @@
 //! paper's scheme / the paper's with viscosity switches: 0.175 / 0.104 at
 //! 24^2, 0.150 / 0.100 at 32^2. Bounds: those 24^2 figures plus 20%, the
 //! second for the default, which must also beat the paper's. Measured
-//! 2026-12-06: `paper` 0.1753, `gas` 0.0843 (turn errors 0.126 / 0.090);
-//! block steps 0.1767 / 0.0952 (0.123 / 0.102). Null
+//! 2026-12-07, evening: `paper` 0.1753, `gas` 0.0873 (turn errors 0.126
+//! / 0.092); block steps 0.1767 / 0.0898 (0.123 / 0.097). Null
 //! solution: the vortex decayed to rest has L1(v_phi) = 0.32 (computed in
 //! the test from the particles), above both bounds.
 

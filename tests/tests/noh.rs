@@ -1,7 +1,7 @@
 //! Noh implosion to t = 0.3 with the case's scheme (`gas`, the ideal-gas
-//! cases' default since 2026-12-06: viscosity switches up to alpha = 0.4
-//! at shocks into cold gas, AV cleaning, conduction across contrasts of
-//! u), at two resolutions: spheres cut from 37^3 and 44^3 lattices (26,745
+//! cases' default since 2026-12-06: viscosity switches up to alpha = 0.3
+//! at shocks into cold gas, AV cleaning, conduction across the larger of
+//! the contrasts of u and of pressure), at two resolutions: spheres cut from 37^3 and 44^3 lattices (26,745
 //! and 44,720 particles; global time steps at 37^3 only). The figures of the `noh` preset (kernel
 //! gradients, switches up to 0.7), the case's scheme before, follow each
 //! `gas` figure in brackets; the bounds were set on it.
@@ -9,16 +9,16 @@
 //! - **Plateau.** The mean density between 0.3 and 0.8 shock radii (the
 //!   centre has the wall-heating dip, the outer part the smeared shock)
 //!   within 5% of the analytic 64 rho0 (rho0 the particle set's own
-//!   density) at both. Measured (2 threads): 118.5 / 119.5 against 121.2 /
-//!   121.9, -2.2% / -2.0% (`noh` 125.4 / 121.4). The initial state has
-//!   rho0 there, -98%.
+//!   density) at both. Measured (2 threads, 2026-12-07, evening, global
+//!   steps at 37^3): 123.5 against 121.2, +1.9% (`noh` 125.4 / 121.4 at
+//!   37^3 / 44^3). The initial state has rho0 there, -98%.
 //! - **Shock radius** (half-way density between the inflow and the shocked
-//!   gas) within 10% of the analytic 0.1: measured 0.1021 / 0.1019
-//!   (0.0957 / 0.0981).
+//!   gas) within 10% of the analytic 0.1: measured 0.0983 (0.0957 /
+//!   0.0981).
 //! - **L1 errors near the shock**, over the particles inside 1.2 shock
 //!   radii against the analytic solution (rho, P, |v|; absolute units,
-//!   64 rho0 = 122). Measured: 21.70 / 9.69 / 0.314 at 37^3, 16.01 /
-//!   7.22 / 0.230 at 44^3 (26.46 / 14.54 / 0.328, 26.17 / 14.79 / 0.323).
+//!   64 rho0 = 122). Measured: 23.25 / 10.12 / 0.317 at 37^3 (26.46 /
+//!   14.54 / 0.328, and 26.17 / 14.79 / 0.323 at 44^3).
 //!   Bounds: the larger of the `noh` figures plus 10%. The
 //!   untouched initial state (rho0, P = 0 and the inflow speed 1
 //!   everywhere) scores 77.3 / 22.5 / 0.553 at 37^3 and 79.6 / 23.4 /
@@ -114,9 +114,10 @@ fn noh_reaches_the_plateau_under_global_time_steps() {
 /// Block time steps (issue 41, the default) at both resolutions, at the
 /// same bounds but momentum: a pair's two forces are evaluated at different times, so it
 /// holds to 1e-6 (measured 2.7e-8 and 6.7e-8 with `noh`). Measured with
-/// `gas` (2026-12-06): plateau 118.1 / 116.4 (-2.6% / -4.5%), shock
-/// 0.1006 / 0.1030, L1 near the shock 20.17 / 9.48 / 0.280 and 17.19 /
-/// 7.25 / 0.237. With `noh` (2026-12-04):
+/// `gas` (2026-12-07, evening): plateau 122.8 / 122.1 (+1.3% / +0.1%),
+/// shock 0.0993 / 0.1006, L1 near the shock 22.41 / 9.82 / 0.307 and
+/// 14.73 / 6.84 / 0.227 (2026-12-06, strong-shock ceiling 0.4 and the
+/// contrast of u alone: 118.1 / 116.4, -2.6% / -4.5%). With `noh` (2026-12-04):
 /// plateau 123.7 / 122.4 (+2.1% / +0.4%), shock 0.0958 / 0.0999, energy
 /// drift 1.7e-4 / 1.2e-4, L1 near the shock 25.36 / 13.88 / 0.320 and
 /// 25.95 / 13.49 / 0.304 (lower than the global runs'), particle updates

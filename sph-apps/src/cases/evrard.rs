@@ -17,37 +17,34 @@ pub const GLASS_SIDE: usize = 15;
 #[derive(Debug, Clone, Copy)]
 pub struct EvrardCollapse;
 
-/// Kernel gradients without grad-h terms, viscosity switches up to 0.5,
-/// artificial conductivity 3 and pairs softened within `(h_i + h_j) / 4`.
-/// With the paper's scheme (IAD, grad-h, alpha = 1, softening `h_i + h_j`)
-/// the collapse lags at these resolutions: at 20^3, t = 0.8, E_kin is 41%
-/// low; the viscosity damps the smooth infall and the h-dependent
-/// softening costs 3.5% of the energy by t = 0.8. Past the bounce the
-/// shocked core keeps a velocity dispersion (on a lattice at 30^3,
-/// t = 1.0, with conductivity 1: 30 times the kinetic energy the 1-D
-/// reference has inside r = 0.2, radial and tangential alike); conduction
-/// of its pressure noise turns it into heat. On the glass, E_kin at
-/// t = 1.0 is +0.1% of the reference at 30^3 and +3.4% at 40^3 with
-/// conductivity 3, +13.3% and +13.6% with 1; 3 was chosen at 30^3 on the
-/// lattice from 1, 2, 2.5, 3, 4 (`docs/cases.md`, Evrard). Not yet `gas`
-/// ([`Scheme::GAS`], issue 42's default for the ideal-gas cases): at t = 2.0
-/// its E_kin is 13.9% below the reference at `-n 30` and its E_int 6.6%
-/// below at `-n 50` (2026-12-06, `docs/schemes.md`).
-pub const SCHEME: Scheme = Scheme::EVRARD;
+/// [`Scheme::GAS`], issue 42's one scheme for the ideal-gas cases, with
+/// pairs softened within `(h_i + h_j) / 4` (the case's [`physics`]). Past
+/// the bounce the shocked core keeps a velocity dispersion (on a lattice
+/// at 30^3, t = 1.0, with conductivity 1: 30 times the kinetic energy
+/// the 1-D reference has inside r = 0.2, radial and tangential alike);
+/// conduction of its pressure noise turns it into heat, which is why
+/// `gas` weights its conduction by the larger of each pair's contrasts
+/// of pressure and of `u` (with the contrast of `u` alone, E_kin at
+/// t = 2.0 is 13.1% below the reference at 14k particles, E_int 6.9%
+/// below at 65k). The case's own scheme before,
+/// [`Scheme::EVRARD`] (kernel gradients, no grad-h,
+/// switches up to 0.5, conductivity 3), stays selectable with
+/// `--scheme evrard` (`docs/schemes.md`, 2026-12-07, evening).
+///
+/// [`physics`]: Case::physics
+pub const SCHEME: Scheme = Scheme::GAS;
 
-/// Courant factor: 2.5 times the default 0.2. This scheme's signal
-/// velocity `c_i + c_j - 3 min(w_ij, 0)` is about twice SPH-EXA's
-/// `(c_i + c_j) / 2 - 2 w_ij` where the sound speed dominates, so 0.5 gives
-/// a step of `0.25 h / c`, about 0.36 of the mean spacing over `c` with 100
-/// neighbours: Phantom's default `0.3 h / v_sig` with its `h = 1.2` spacings.
-/// From 0.4 to 0.5 the energies at t = 0.8, 1.0 and 2.0 move by at most 0.1
-/// points of percent at 30^3 and 40^3 on the glass with 15% fewer steps
-/// (30^3: 1130 -> 962 to t = 2); on the 30^3 lattice to t = 1.0 (491 -> 416
-/// steps) E_kin at t = 1.0 goes from +4.4% to +3.7% and the rest move by at
-/// most 0.2 points. Above 0.5 the density-change criterion sets most steps
-/// (0.6: 8% fewer again). 0.2 and 0.4 differ by at most 0.9 points
-/// (`docs/cases.md`, Evrard).
-pub const COURANT: f64 = 0.5;
+/// Courant factor: 1.5 times the default 0.2. With `gas` the total energy
+/// through the bounce (t <= 1.5, 14,175 particles) drifts by 1.06e-2 at
+/// 0.5 (the `evrard` scheme's old factor), 2.9e-3 at 0.3 and 8.5e-4 at
+/// 0.2, while the energies at t = 0.8, 1.0 and 2.0 move by at most 0.7
+/// points of percent from 0.5 to 0.3 and 0.2 points from 0.3 to 0.2;
+/// 0.3 costs 0.70 of 0.2's particle updates (9.8 M against 14.0 M to
+/// t = 2). The signal velocity `c_i + c_j - 3 min(w_ij, 0)` of the
+/// paper's viscosity form is about twice SPH-EXA's where the sound speed
+/// dominates, so 0.3 is a step of `0.15 h / c` (`docs/schemes.md`,
+/// 2026-12-07, evening).
+pub const COURANT: f64 = 0.3;
 
 /// Adiabatic index.
 pub const GAMMA: f64 = 5.0 / 3.0;

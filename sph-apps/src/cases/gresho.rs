@@ -31,8 +31,7 @@ impl Case for GreshoVortex {
     }
 
     /// `gas` ([`Scheme::GAS`]), issue 42's one default for the ideal-gas
-    /// cases (Sedov, Kelvin-Helmholtz, the isobaric cube and Evrard keep
-    /// their own until it meets their bounds).
+    /// cases (the isobaric cube keeps its own until it meets its bound).
     fn default_scheme(&self) -> Scheme {
         Scheme::GAS
     }

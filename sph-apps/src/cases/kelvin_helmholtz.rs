@@ -99,12 +99,15 @@ impl Case for KelvinHelmholtz {
 
     /// `gas` ([`Scheme::GAS`], issue 42's default for the ideal-gas
     /// cases), whose AV cleaning (after SPH-EXA's) leaves the layer's
-    /// shear undamped. At the case's default 64^2 x 8 and block time steps
-    /// its M(1.5) is 0.1137 against 0.1117 for `shear` ([`Scheme::SHEAR`],
-    /// the case's scheme until 2026-12-07); at 32^2 x 8 it is 0.0718
-    /// against 0.0775, and with global steps 0.0803 against 0.066 (32^2)
-    /// and 0.1107 against 0.117 (64^2): issue 42's "no lower than `shear`"
-    /// is missed by 7% and 5% there (`docs/schemes.md`, 2026-12-07).
+    /// shear undamped. At 32^2 x 8 its M(1.5) is 0.0756 under block time
+    /// steps against 0.0775 for `shear` ([`Scheme::SHEAR`], the case's
+    /// scheme until 2026-12-07) and 0.0855 under global steps against 0.066
+    /// (2026-12-07, evening: the larger conduction contrast and the
+    /// strong-shock ceiling 0.3). Before those, at the case's default
+    /// 64^2 x 8, 0.1137 (block) against 0.1117 and 0.1107 (global) against
+    /// 0.117: issue 42's "no lower than `shear`" is missed by 2.5% at 32^2
+    /// under block steps and was by 5% at 64^2 under global steps
+    /// (`docs/schemes.md`, 2026-12-07).
     fn default_scheme(&self) -> Scheme {
         Scheme::GAS
     }

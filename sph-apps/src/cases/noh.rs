@@ -11,7 +11,7 @@ use sph_tree::{Boundary, BoundingBox};
 pub struct NohImplosion;
 
 /// Noh's scheme: `gas`, issue 42's one default for the ideal-gas cases
-/// ([`Scheme::GAS`]): its viscosity switches stop at alpha = 0.4 in shocks
+/// ([`Scheme::GAS`]): its viscosity switches stop at alpha = 0.3 in shocks
 /// into cold gas. With the paper's constant alpha = 1 the viscosity also
 /// heats the converging inflow and the mean post-shock density (0.3 to 0.8
 /// shock radii) stays near 21 rho0 against 64 rho0. The `noh` preset

@@ -14,6 +14,7 @@
 //! assert_eq!(s.alpha(), 0.5);
 //! ```
 
+use sph_core::conduction::Contrast;
 use sph_core::{AvForm, Choice, Gradients, Scheme, Volume};
 use std::fmt;
 
@@ -212,15 +213,14 @@ pub const SCHEME_OPTIONS: &[SchemeOption] = &[
     },
     SchemeOption {
         key: "conduction-contrast",
-        help: "Weight each pair's conduction by its contrast of internal energy, |u_i - u_j| / \
-               max(u_i, u_j): heat crosses fronts (a blast's hot gas against the cold) at \
-               full strength while neighbours of similar u (a contact) exchange less; no effect \
-               without --conductivity. Default: the scheme's (on in `gas`, off in the other \
-               presets)",
-        values: Values::Switch,
-        get: |s| Setting::Switch(s.conduction_contrast),
-        set: |s, v| s.conduction_contrast = v.on().unwrap_or(s.conduction_contrast),
-        listed: |s| s.conduction_contrast,
+        help: "Weight each pair's conduction by a contrast in [0, 1]: heat crosses fronts (a \
+               blast's hot gas against the cold) at full strength while neighbours that differ \
+               little exchange less; no effect without --conductivity. Default: the scheme's \
+               (`larger` in `gas`, `off` in the other presets)",
+        values: Values::Names(choices::<Contrast>),
+        get: |s| Setting::Name(s.conduction_contrast.name()),
+        set: |s, v| s.conduction_contrast = v.choice().unwrap_or(s.conduction_contrast),
+        listed: |s| s.conduction_contrast != Contrast::Off,
     },
     SchemeOption {
         key: "artificial-stress",

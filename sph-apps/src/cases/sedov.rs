@@ -34,10 +34,9 @@ impl Case for SedovBlast {
 
     /// `gas` ([`Scheme::GAS`], issue 42's one scheme for the ideal-gas
     /// cases): L1 rho, P and |v| below the C++ `ve`'s at 30^3, 40^3 and
-    /// 50^3, energy kept to 5e-5 under block steps at 20^3 and 30^3 (its
-    /// conduction exchanged as impulses, `docs/block-timesteps.md`).
-    /// `--scheme best` is level with it at 30^3 and 40^3 and lower at 50^3
-    /// (`docs/schemes.md`).
+    /// 50^3, energy kept to 3e-4 under block steps at 20^3 and 30^3 (its
+    /// conduction exchanged as impulses, `docs/block-timesteps.md`)
+    /// (`docs/schemes.md`, 2026-12-07, evening).
     fn default_scheme(&self) -> Scheme {
         Scheme::GAS
     }

@@ -5,7 +5,7 @@ use crate::common::{self, kernel, periodic_lattice as lattice, Rng, Setup};
 
 use proptest::prelude::*;
 use sph_core::av_switch::{velocity_divergence, FlowState};
-use sph_core::conduction::{conduction, Conductivity};
+use sph_core::conduction::{conduction, Conductivity, Contrast};
 use sph_core::density::{density, Positions};
 use sph_core::iad::iad;
 use sph_core::integrate::integrate;
@@ -173,12 +173,11 @@ fn compute_forces_with(
     tension: bool,
     cleaning: Cleaning,
 ) {
-    compute_forces_conducting(s, gradients, stress, tension, cleaning, None, false);
+    compute_forces_conducting(s, gradients, stress, tension, cleaning, None, Contrast::Off);
 }
 
 /// As `compute_forces_with`, with the artificial conductivity `alpha_u`
-/// inside the momentum pass, each pair's term weighted by its contrast of
-/// u where `contrast`.
+/// inside the momentum pass, each pair's term weighted by `contrast`.
 fn compute_forces_conducting(
     s: &mut Setup,
     gradients: Gradients,
@@ -186,7 +185,7 @@ fn compute_forces_conducting(
     tension: bool,
     cleaning: Cleaning,
     conductivity: Option<f64>,
-    contrast: bool,
+    contrast: Contrast,
 ) {
     let p = &mut s.p;
     Eos::IdealGas { gamma: 5.0 / 3.0 }.apply(&p.rho, &p.u, None, &mut p.p, &mut p.c);
@@ -557,15 +556,16 @@ fn conductivity_conserves_energy_and_flows_downhill() {
     assert!(du[coldest] >= 0.0, "the coldest particle must not cool");
 }
 
-/// Conduction weighted by each pair's contrast of u (`gas`'s) still only
-/// moves energy (sum m du/dt zero to round-off, gas at rest so that no
-/// other term heats), cools the hot spot's centre, and takes from a
-/// pair of similar u less than Price's: over a gentle bump (u from 1 to
-/// 1.2) the energy moved is at most 0.2 of Price's, over a steep one
-/// (1 to 100) the centre loses at least half of Price's rate.
+/// Conduction weighted by each pair's contrast of u, of pressure or the
+/// larger of the two (`gas`'s) still only moves energy (sum m du/dt zero to round-off, gas
+/// at rest so that no other term heats), cools the hot spot's centre, and
+/// takes from a pair of similar u less than Price's: over a gentle bump
+/// (u from 1 to 1.2, P following it at nearly uniform density) the energy
+/// moved is at most 0.2 of Price's, over a steep one (1 to 100) the centre
+/// loses at least half of Price's rate.
 #[test]
 fn contrast_conduction_conserves_energy_and_spares_small_contrasts() {
-    let rates = |amplitude: f64, contrast: bool| {
+    let rates = |amplitude: f64, contrast: Contrast| {
         let mut s = lattice(10, 0.3, 60.0, 5);
         let n = s.p.len();
         for i in 0..n {
@@ -585,20 +585,29 @@ fn contrast_conduction_conserves_energy_and_spares_small_contrasts() {
         );
         (s.p.du.clone(), s.p.m.clone(), s.p.u.clone())
     };
-    for amplitude in [0.2, 99.0] {
-        let (price, _, _) = rates(amplitude, false);
-        let (du, m, u) = rates(amplitude, true);
+    for (amplitude, contrast) in [0.2, 99.0]
+        .into_iter()
+        .flat_map(|a| [Contrast::Energy, Contrast::Pressure, Contrast::Larger].map(|c| (a, c)))
+    {
+        let (price, _, _) = rates(amplitude, Contrast::Off);
+        let (du, m, u) = rates(amplitude, contrast);
         let total: f64 = du.iter().zip(&m).map(|(d, m)| m * d).sum();
         let scale: f64 = du.iter().zip(&m).map(|(d, m)| m * d.abs()).sum();
         assert!(scale > 0.0);
-        assert!(total.abs() < 1e-13 * scale, "{total:e} vs {scale:e}");
+        assert!(
+            total.abs() < 1e-13 * scale,
+            "{contrast:?}: {total:e} vs {scale:e}"
+        );
         let hottest = (0..u.len()).max_by(|&a, &b| u[a].total_cmp(&u[b])).unwrap();
         assert!(du[hottest] < 0.0, "the hottest particle must cool");
         if amplitude < 1.0 {
             // Each pair's weight is at most 0.2 / 1.2 here.
             let moved: f64 = du.iter().zip(&m).map(|(d, m)| m * d.abs()).sum();
             let price: f64 = price.iter().zip(&m).map(|(d, m)| m * d.abs()).sum();
-            assert!(moved <= 0.2 * price, "{moved:e} against Price's {price:e}");
+            assert!(
+                moved <= 0.2 * price,
+                "{contrast:?}: {moved:e} against Price's {price:e}"
+            );
         } else {
             assert!(
                 du[hottest] < 0.5 * price[hottest],
@@ -627,7 +636,15 @@ fn conduction_inside_the_momentum_pass_equals_its_own_pass() {
         }
         compute_density(&mut s);
         compute_iad(&mut s);
-        compute_forces_conducting(&mut s, gradients, None, false, Cleaning::Off, None, false);
+        compute_forces_conducting(
+            &mut s,
+            gradients,
+            None,
+            false,
+            Cleaning::Off,
+            None,
+            Contrast::Off,
+        );
         let mut expected = s.p.du.clone();
         let pos = positions(&s.p);
         let p = &s.p;
@@ -650,7 +667,7 @@ fn conduction_inside_the_momentum_pass_equals_its_own_pass() {
             false,
             Cleaning::Off,
             Some(2.0),
-            false,
+            Contrast::Off,
         );
         assert_eq!(accel, [s.p.ax.clone(), s.p.ay.clone(), s.p.az.clone()]);
         let scale = expected.iter().fold(0.0f64, |a, d| a.max(d.abs()));

@@ -89,8 +89,8 @@ pub(crate) struct RunArgs {
     pub(crate) ngmax: usize,
     /// Scheme preset to start from instead of the case's own: `gas` (the
     /// ideal-gas cases' default: `best` with AV cleaning, switches from
-    /// alpha 0.4 at strong shocks to 2 at weak ones, conductivity 2
-    /// weighted by each pair's contrast of u), `paper`
+    /// alpha 0.3 at strong shocks to 2 at weak ones, conductivity 2
+    /// weighted by each pair's larger contrast of u or pressure), `paper`
     /// (the seed paper's eqs. 1-5: IAD, grad-h, constant alpha = 1), `std`
     /// (SPH-EXA's std: as paper without grad-h), `ve` (SPH-EXA's default:
     /// volume elements, grad-h, IAD, its switches), `ve-ac` (ve without
@@ -112,7 +112,7 @@ pub(crate) struct RunArgs {
     #[arg(long, value_enum, default_value = "hilbert")]
     pub(crate) curve: CurveArg,
     /// Courant factor, in (0, 1] (default: the case's, see `sphexa cases`:
-    /// 0.2, evrard 0.5).
+    /// 0.2, evrard 0.3).
     #[arg(long, allow_negative_numbers = true, value_parser = parse_courant)]
     pub(crate) courant: Option<f64>,
     /// The first time step (default: ramp). `criteria` skips the ramp
