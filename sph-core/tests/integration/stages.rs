@@ -636,15 +636,18 @@ fn conduction_inside_the_momentum_pass_equals_its_own_pass() {
         }
         compute_density(&mut s);
         compute_iad(&mut s);
-        compute_forces_conducting(
-            &mut s,
-            gradients,
-            None,
-            false,
-            Cleaning::Off,
-            None,
-            Contrast::Off,
-        );
+        let forces = |s: &mut Setup, conductivity| {
+            compute_forces_conducting(
+                s,
+                gradients,
+                None,
+                false,
+                Cleaning::Off,
+                conductivity,
+                Contrast::Off,
+            )
+        };
+        forces(&mut s, None);
         let mut expected = s.p.du.clone();
         let pos = positions(&s.p);
         let p = &s.p;
@@ -660,15 +663,7 @@ fn conduction_inside_the_momentum_pass_equals_its_own_pass() {
             &mut expected,
         );
         let accel = [s.p.ax.clone(), s.p.ay.clone(), s.p.az.clone()];
-        compute_forces_conducting(
-            &mut s,
-            gradients,
-            None,
-            false,
-            Cleaning::Off,
-            Some(2.0),
-            Contrast::Off,
-        );
+        forces(&mut s, Some(2.0));
         assert_eq!(accel, [s.p.ax.clone(), s.p.ay.clone(), s.p.az.clone()]);
         let scale = expected.iter().fold(0.0f64, |a, d| a.max(d.abs()));
         assert!(scale > 0.0);
