@@ -59,5 +59,6 @@ mod tests {
         round_trips::<Volume>();
         round_trips::<AvForm>();
         round_trips::<FirstStep>();
+        round_trips::<crate::conduction::Contrast>();
     }
 }

@@ -118,7 +118,8 @@ pub enum Contrast {
     /// `sqrt(|P_i - P_j| / rho_ij)` already vanishes there), while the
     /// pressure noise of a shocked core and every shock conduct. So does
     /// not the hot, nearly isobaric interior of a blast: Sedov's L1 P at
-    /// 50^3 rises by 5% against [`Energy`](Self::Energy).
+    /// 50^3 is 0.1865 with it against 0.1773 with [`Larger`](Self::Larger)
+    /// (`gas` otherwise).
     Pressure,
     /// The larger of the two contrasts: heat crosses a jump of pressure
     /// (a shocked core's noise, where neighbours' `u` differ little) and a

@@ -508,6 +508,20 @@ impl Scheme {
 mod tests {
     use super::*;
 
+    /// The contrast as written before it was a choice (`true` / `false`)
+    /// and as a name.
+    #[test]
+    fn conduction_contrast_reads_flags_and_names() {
+        use serde::de::value::{BoolDeserializer, Error, StrDeserializer};
+        let flag = |b| contrast_or_flag(BoolDeserializer::<Error>::new(b)).unwrap();
+        let name = |n| contrast_or_flag(StrDeserializer::<Error>::new(n));
+        assert_eq!(flag(true), Contrast::Energy);
+        assert_eq!(flag(false), Contrast::Off);
+        assert_eq!(name("larger").unwrap(), Contrast::Larger);
+        assert_eq!(name("pressure").unwrap(), Contrast::Pressure);
+        assert!(name("on").is_err());
+    }
+
     #[test]
     fn presets_are_valid_and_distinct() {
         for (i, (name, s, _)) in PRESETS.iter().enumerate() {
