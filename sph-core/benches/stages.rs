@@ -1,6 +1,7 @@
 //! Hot paths of sph-core on 1e5 particles (a perturbed 46^3 lattice in a
 //! periodic box, ~100 neighbours): density + grad-h, IAD, momentum-energy
-//! (constant and per-particle viscosity), AV switches; and the stirring
+//! (constant and per-particle viscosity; with the conduction under each
+//! contrast weight), AV switches; and the stirring
 //! field on 32^3 random points.
 
 // criterion_group! defines a public function without docs.
@@ -10,12 +11,15 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use sph_core::av_switch::{
     iad_and_velocity_divergence, update_alpha, velocity_divergence, AvSwitchParams, FlowState,
 };
+use sph_core::conduction::{Conductivity, Contrast};
 use sph_core::density::{density, Positions};
 use sph_core::iad::iad;
 use sph_core::momentum::{
-    momentum_energy, momentum_energy_switched, Gradients, HydroState, PairFactors, Rates,
+    momentum_energy, momentum_energy_switched, momentum_energy_with, Alpha, Gradients, HydroState,
+    MomentumScheme, PairFactors, Rates,
 };
 use sph_core::stirring::{Mt19937, StirParams, Stirring};
+use sph_core::Choice;
 use sph_core::{Eos, FieldSet, Particles};
 use sph_kernels::{FastKernel, Sinc};
 use sph_tree::{
@@ -128,6 +132,7 @@ fn benches(c: &mut Criterion) {
             ay,
             az,
             du,
+            u,
             ..
         } = &mut p;
         let state = HydroState {
@@ -178,6 +183,42 @@ fn benches(c: &mut Criterion) {
             })
         });
         if grad == Gradients::Iad {
+            // The conduction inside the momentum pass (alpha_u = 2, as
+            // `gas`), with each contrast weight: what `larger`'s two
+            // divisions per pair cost against `energy`'s one.
+            for contrast in [
+                Contrast::Off,
+                Contrast::Energy,
+                Contrast::Pressure,
+                Contrast::Larger,
+            ] {
+                let scheme = MomentumScheme {
+                    conduction: Some(Conductivity {
+                        alpha_u: 2.0,
+                        p: pr,
+                        u,
+                        contrast,
+                        impulses: None,
+                    }),
+                    ..MomentumScheme::paper(grad, Alpha::PerParticle(&alpha))
+                };
+                let name = format!("{name}_conduction_{}", contrast.name());
+                g.bench_function(name, |b| {
+                    b.iter(|| {
+                        let rates = Rates {
+                            ax: &mut *ax,
+                            ay: &mut *ay,
+                            az: &mut *az,
+                            du: &mut *du,
+                            criteria: None,
+                            impulse: None,
+                        };
+                        black_box(momentum_energy_with(
+                            &kernel, &bbox, state, &factors, scheme, &list, rates,
+                        ))
+                    })
+                });
+            }
             // Both passes of the AV switches (div v, then grad div v and alpha).
             let flow = FlowState::from(state);
             let params = AvSwitchParams::default();
