@@ -16,9 +16,11 @@
 //! Measured (2026-12-07, evening, release, 2 threads), 14,175 particles
 //! (`-n 30`): t = 0.8 -0.3 / -1.3 / -1.0%, t = 1.0 +3.6 / -3.8 / -2.1%,
 //! t = 2.0 -9.6 / +3.6 / +0.2%, drift through the bounce 2.6e-3 (9.9 M
-//! updates). At 65,484 particles (`-n 50`, not run here: about 20 minutes
-//! on 2 cores) `docs/schemes.md` has the figures (2026-12-07, evening):
-//! E_int at t = 2.0 is outside its 5% there.
+//! updates). At 65,484 particles (`-n 50`, not run here: 18 minutes on 2
+//! cores; `docs/schemes.md`, 2026-12-07 night): -0.2 / -1.5 / -1.4%,
+//! +5.9 / -4.0 / -2.0%, -10.4 / -5.8 / -4.2%: E_kin at t = 1.0 and E_int
+//! at t = 2.0 are outside their 5% there, and E_kin at t = 2.0 does not
+//! fall with resolution (-9.6% at 14k).
 
 use sph_apps::simulation::Stop;
 use sph_apps::Summary;

@@ -103,11 +103,12 @@ impl Case for KelvinHelmholtz {
     /// steps against 0.0775 for `shear` ([`Scheme::SHEAR`], the case's
     /// scheme until 2026-12-07) and 0.0855 under global steps against 0.066
     /// (2026-12-07, evening: the larger conduction contrast and the
-    /// strong-shock ceiling 0.3). Before those, at the case's default
-    /// 64^2 x 8, 0.1137 (block) against 0.1117 and 0.1107 (global) against
-    /// 0.117: issue 42's "no lower than `shear`" is missed by 2.5% at 32^2
-    /// under block steps and was by 5% at 64^2 under global steps
-    /// (`docs/schemes.md`, 2026-12-07).
+    /// strong-shock ceiling 0.3). At the case's default 64^2 x 8, block
+    /// steps: 0.1053 against `shear`'s 0.1117 (0.1137 before those two
+    /// changes; with the contrast of `u` alone, 0.1137 again: the pressure
+    /// contrast damps the mode). Issue 42's "no lower than `shear`" is
+    /// missed by 2.5% at 32^2 and 6% at 64^2 under block steps
+    /// (`docs/schemes.md`, 2026-12-07, night).
     fn default_scheme(&self) -> Scheme {
         Scheme::GAS
     }
