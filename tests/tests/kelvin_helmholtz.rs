@@ -3,7 +3,8 @@
 //! `shear` before: both with viscosity switches and the AV cleaning): the
 //! seeded mode must grow. `gas`: M(1.5) 0.0855 global and 0.0756 block at
 //! 32^2 x 8 (2026-12-07, evening; before, 0.0803 and 0.0718), 0.1053
-//! block at 64^2 x 8 (before, 0.1137: `docs/schemes.md`, 2026-12-07, night).
+//! block and 0.1023 global at 64^2 x 8 (before, 0.1137 block:
+//! `docs/schemes.md`, 2026-12-07 night and 2026-12-08).
 //!
 //! Measured M(1.5) (2 threads; seed 0.01, McNally's converged reference
 //! 0.1479): `shear` 0.066 at 32^2 x 8 and 0.117 at 64^2 x 8; `ve` 0.017

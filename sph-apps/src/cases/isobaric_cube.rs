@@ -48,7 +48,10 @@ impl Case for IsobaricCube {
     /// Pressure-energy volumes ([`Scheme::CONTACT`]): the cube's contact
     /// keeps one smoothed pressure. Not yet `gas` ([`Scheme::GAS`], the
     /// default of the other ideal-gas cases): its time-mean v_rms / c is
-    /// 0.067 at 16 and 0.044 at 32 per side, against 0.022 and 0.017.
+    /// 0.067 at 16 and 0.044 at 32 per side, against 0.022 and 0.017. The
+    /// cube needs pressure-energy volumes, kernel gradients and a constant
+    /// alpha = 1 together, which Sedov, Noh and Kelvin-Helmholtz do not
+    /// bear (`docs/schemes.md`, 2026-12-08).
     fn default_scheme(&self) -> Scheme {
         Scheme::CONTACT
     }
