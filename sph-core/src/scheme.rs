@@ -281,7 +281,8 @@ impl Scheme {
     /// Sedov's, into cold gas: with the conduction below, Noh's plateau
     /// under block steps at 44^3 is 0.949 of the analytic at 0.4, 0.970
     /// at 0.35 and 1.006 at 0.3 (with the pressure contrast alone; 1.016
-    /// at 37^3); Sedov's L1 moves in the third digit) to 2 at weak ones (Sod's: they ring behind the front with less)
+    /// at 37^3); Sedov's L1 moves in the third digit) to 2 at weak ones
+    /// (Sod's: they ring behind the front with less)
     /// ([`AvSwitchParams::ceiling`]), and conductivity
     /// `alpha_u = 2` weighted by the larger of each pair's contrasts of
     /// `u` and of pressure ([`Contrast::Larger`]: Sedov's front and hot
@@ -290,9 +291,9 @@ impl Scheme {
     /// full flux, and a collapse's shocked core needs it across its
     /// pressure noise, where neighbours' `u` differ little: with the
     /// contrast of `u` alone Evrard's E_kin at t = 2.0 is 13.1% low at
-    /// 14k particles and its E_int 6.9% low at 65k). Measured on every case at two resolutions in
-    /// `docs/schemes.md` (2026-12-06, one scheme; 2026-12-07 (evening), the
-    /// larger contrast).
+    /// 14k particles and its E_int 6.9% low at 65k). Measured on every
+    /// case at two resolutions in `docs/schemes.md` (2026-12-06, one
+    /// scheme; 2026-12-07 (evening), the larger contrast).
     pub const GAS: Scheme = Scheme {
         viscosity: Viscosity::Switched(AvSwitchParams {
             alpha_max: 0.3,
