@@ -20,7 +20,8 @@
 //! cores; `docs/schemes.md`, 2026-12-07 night): -0.2 / -1.5 / -1.4%,
 //! +5.9 / -4.0 / -2.0%, -10.4 / -5.8 / -4.2%: E_kin at t = 1.0 and E_int
 //! at t = 2.0 are outside their 5% there, and E_kin at t = 2.0 does not
-//! fall with resolution (-9.6% at 14k).
+//! fall with resolution (-9.6% at 14k); Courant 0.2 moves them by at
+//! most 0.2 points (2026-12-08).
 
 use sph_apps::simulation::Stop;
 use sph_apps::Summary;
