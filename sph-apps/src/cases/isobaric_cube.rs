@@ -50,8 +50,9 @@ impl Case for IsobaricCube {
     /// default of the other ideal-gas cases): its time-mean v_rms / c is
     /// 0.067 at 16 and 0.044 at 32 per side, against 0.022 and 0.017. The
     /// cube needs pressure-energy volumes, kernel gradients and a constant
-    /// alpha = 1 together, which Sedov, Noh and Kelvin-Helmholtz do not
-    /// bear (`docs/schemes.md`, 2026-12-08).
+    /// alpha = 1 together: Sedov and Kelvin-Helmholtz fail with the three,
+    /// Noh and Gresho with kernel gradients alone (`docs/schemes.md`,
+    /// 2026-12-08).
     fn default_scheme(&self) -> Scheme {
         Scheme::CONTACT
     }
